@@ -1,0 +1,276 @@
+//! The simulator object: validated parameters, state, modes, fixed step.
+
+use crate::dynamics::{eval, Coeffs, Law};
+use crate::integrator::{step_hybrid, step_smooth, StepReport};
+use crate::modes::Mode;
+use crate::params::{check, Error, Params, Problem};
+use crate::real::Real;
+use crate::solve::Singular;
+use crate::state::State;
+use core::fmt;
+
+/// Input voltage saturation [V], as the rig's amplifiers.
+pub const U_MAX: f64 = 12.0;
+
+/// Which friction law the simulator uses.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FrictionLaw {
+    /// The hybrid automaton (exact sticking). The product.
+    Hybrid,
+    /// The paper's comparison model, `Dbar qd + Cbar(q) tanh(gamma qd)`, `gamma` in s/m (> 0).
+    Tanh {
+        /// Slope factor [s/m].
+        gamma: f64,
+    },
+}
+
+/// Simulator configuration.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Config {
+    /// Fixed step [s] (> 0). Default 1 ms; the rig samples at 2 ms.
+    pub h: f64,
+    /// Friction law.
+    pub law: FrictionLaw,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Config {
+            h: 1e-3,
+            law: FrictionLaw::Hybrid,
+        }
+    }
+}
+
+/// Why a step was rejected. The state and modes are left as they were before the step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StepError {
+    /// Input voltage of axis 0 (X), 1 (Y) or 2 (rope) is NaN or infinite.
+    InputNotFinite {
+        /// Axis index.
+        axis: usize,
+    },
+    /// The mass matrix was not positive definite (e.g. `alpha` reached 0 or pi).
+    Singular,
+    /// The step produced a non-finite state.
+    NonFinite,
+}
+
+impl fmt::Display for StepError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            StepError::InputNotFinite { axis } => {
+                let name = ["u_x", "u_y", "u_l"].get(*axis).copied().unwrap_or("u");
+                write!(f, "input `{name}` is not finite; step rejected")
+            }
+            StepError::Singular => write!(f, "mass matrix not positive definite; step rejected"),
+            StepError::NonFinite => write!(f, "step gave a non-finite state; step rejected"),
+        }
+    }
+}
+
+impl From<Singular> for StepError {
+    fn from(_: Singular) -> Self {
+        StepError::Singular
+    }
+}
+
+/// Quantities derived from the current state (see [`Crane::output`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Output<R: Real = f64> {
+    /// Accelerations `[xdd, ydd, Ldd, alphadd, betadd]` with the last input.
+    pub qdd: [R; 5],
+    /// Friction force [N] of X, Y, rope, opposing motion when moving; the holding (static
+    /// friction) force when stopped, positive along the axis.
+    pub friction: [R; 3],
+    /// Rope tension [N], positive when the rope pulls: `Jbar_l Ldd - (K_l u_l - f_l)`.
+    pub tension: R,
+    /// Payload position `[x_p, y_p, z_p]` [m].
+    pub payload: [R; 3],
+}
+
+/// The crane simulator: a hybrid automaton with three drive axes and a fixed step.
+///
+/// ```
+/// use crane_model::{Crane, Config, Params, State};
+/// let q = [0.2, 0.3, 0.4, core::f64::consts::FRAC_PI_2, 0.0];
+/// let mut crane: Crane = Crane::new(&Params::default(), Config::default(), State { q, qd: [0.0; 5] })?;
+/// crane.step([3.0, 0.0, 0.0]).unwrap();
+/// # Ok::<(), crane_model::Error>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct Crane<R: Real = f64> {
+    coeffs: Coeffs<R>,
+    law: Law<R>,
+    h: R,
+    h64: f64,
+    state: State<R>,
+    modes: [Mode; 3],
+    steps: u64,
+    u_last: [R; 3],
+}
+
+impl<R: Real> Crane<R> {
+    /// Validates parameters, configuration and initial state, and builds the simulator.
+    ///
+    /// The initial modes follow the initial velocities (0.0 is `Stopped`); an axis sitting at
+    /// a limit while moving into it starts `Stopped` with zero velocity. Errors name the field
+    /// (`"config.h"`, `"state.q[0]"`, `"x.viscous_pos"`...).
+    pub fn new(params: &Params, config: Config, init: State<f64>) -> Result<Self, Error> {
+        params.validate()?;
+        check("config.h", config.h, Problem::NotPositive)?;
+        let law = match config.law {
+            FrictionLaw::Hybrid => Law::Hybrid,
+            FrictionLaw::Tanh { gamma } => {
+                check("config.law.gamma", gamma, Problem::NotPositive)?;
+                Law::Tanh(R::from_f64(gamma))
+            }
+        };
+        const Q: [&str; 5] = [
+            "state.q[0]",
+            "state.q[1]",
+            "state.q[2]",
+            "state.q[3]",
+            "state.q[4]",
+        ];
+        const QD: [&str; 5] = [
+            "state.qd[0]",
+            "state.qd[1]",
+            "state.qd[2]",
+            "state.qd[3]",
+            "state.qd[4]",
+        ];
+        for ((name, v), (dname, dv)) in Q.iter().zip(init.q).zip(QD.iter().zip(init.qd)) {
+            check(name, v, Problem::NotFinite)?;
+            check(dname, dv, Problem::NotFinite)?;
+        }
+        let mut q = init.q;
+        let mut qd = init.qd;
+        let mut modes = [Mode::Stopped; 3];
+        for (i, ax) in params.axes().iter().enumerate() {
+            let (p, v) = (q[i], qd[i]);
+            if p < ax.min || p > ax.max {
+                return Err(Error {
+                    field: Q[i],
+                    problem: Problem::OutOfLimits,
+                    value: p,
+                });
+            }
+            if (p >= ax.max && v > 0.0) || (p <= ax.min && v < 0.0) {
+                qd[i] = 0.0;
+            }
+            modes[i] = Mode::of_velocity(qd[i]);
+            q[i] = p;
+        }
+        let alpha = q[3];
+        if !(alpha > 0.0 && alpha < core::f64::consts::PI) {
+            return Err(Error {
+                field: Q[3],
+                problem: Problem::AngleOutOfRange,
+                value: alpha,
+            });
+        }
+        let h = R::from_f64(config.h);
+        Ok(Crane {
+            coeffs: Coeffs::new(params),
+            law,
+            h,
+            h64: config.h,
+            state: State {
+                q: q.map(R::from_f64),
+                qd: qd.map(R::from_f64),
+            },
+            modes,
+            steps: 0,
+            u_last: [R::ZERO; 3],
+        })
+    }
+
+    /// Advances by one step `h` with input voltages `u = [u_x, u_y, u_l]` [V], held constant
+    /// over the step and saturated to +-12 V.
+    ///
+    /// A non-finite input, a singular mass matrix or a non-finite result rejects the step:
+    /// state, modes and time stay as they were.
+    pub fn step(&mut self, u: [R; 3]) -> Result<StepReport, StepError> {
+        let lim = R::from_f64(U_MAX);
+        let mut uc = [R::ZERO; 3];
+        for (axis, (dst, v)) in uc.iter_mut().zip(u).enumerate() {
+            if !v.is_finite() {
+                return Err(StepError::InputNotFinite { axis });
+            }
+            *dst = if v > lim {
+                lim
+            } else if v < -lim {
+                -lim
+            } else {
+                v
+            };
+        }
+        let (state, modes, report) = match self.law {
+            Law::Hybrid => step_hybrid(&self.coeffs, self.h, &self.state, &self.modes, &uc)?,
+            Law::Tanh(gamma) => {
+                let s = step_smooth(&self.coeffs, gamma, self.h, &self.state, &uc)?;
+                let modes = [0, 1, 2].map(|i| Mode::of_velocity(s.qd[i].to_f64()));
+                (s, modes, StepReport::default())
+            }
+        };
+        if !state.is_finite() {
+            return Err(StepError::NonFinite);
+        }
+        self.state = state;
+        self.modes = modes;
+        self.u_last = uc;
+        self.steps += 1;
+        Ok(report)
+    }
+
+    /// Current state.
+    pub fn state(&self) -> State<R> {
+        self.state
+    }
+
+    /// Current modes of X, Y, rope.
+    pub fn modes(&self) -> [Mode; 3] {
+        self.modes
+    }
+
+    /// Simulated time [s]: `n h` after `n` accepted steps.
+    pub fn time(&self) -> f64 {
+        self.steps as f64 * self.h64
+    }
+
+    /// Number of accepted steps.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// Step length [s].
+    pub fn h(&self) -> f64 {
+        self.h64
+    }
+
+    /// The precomputed coefficients (for tools that evaluate the dynamics themselves).
+    pub fn coeffs(&self) -> &Coeffs<R> {
+        &self.coeffs
+    }
+
+    /// Accelerations, friction forces, rope tension and payload position at the current
+    /// state with the last applied (saturated) input. Costs one evaluation of the dynamics.
+    pub fn output(&self) -> Result<Output<R>, StepError> {
+        let e = eval(
+            &self.coeffs,
+            self.law,
+            &self.state,
+            &self.modes,
+            &self.u_last,
+        )?;
+        let rope = &self.coeffs.axes[2];
+        let tension = self.coeffs.jbar_l * e.qdd[2] - (rope.gain * self.u_last[2] - e.fric[2]);
+        Ok(Output {
+            qdd: e.qdd,
+            friction: e.fric,
+            tension,
+            payload: self.state.payload(),
+        })
+    }
+}

@@ -1,0 +1,232 @@
+//! The continuous dynamics inside one mode: `M(q) qdd + h(q, qd) + G(q) = Q`.
+//!
+//! This is the energy-consistent Lagrangian form of `shared/MODEL.md` (the mass matrix
+//! couples the rope to the trolley through `Jbar_l`, unlike the paper's printed coupling).
+//! Stopped drive axes are constrained to `qdd_i = 0`: their row and column of `M` are
+//! replaced by the unit vector and the holding force that friction must supply is computed
+//! from the original row. The exact operation order is fixed by `NUMERICS.md`.
+
+use crate::friction::{hybrid, smooth};
+use crate::modes::Mode;
+use crate::params::{AxisParams, Params};
+use crate::real::Real;
+use crate::solve::solve5;
+pub use crate::solve::Singular;
+use crate::state::State;
+
+/// Coefficients of one drive axis in the model's scalar type.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AxisCoeffs<R: Real> {
+    /// Gain `K` [N/V].
+    pub gain: R,
+    /// Viscous `Dbar+` [N s/m].
+    pub visc_pos: R,
+    /// Viscous `Dbar-` [N s/m].
+    pub visc_neg: R,
+    /// Dry-friction polynomial `Cbar+` coefficients c0..c4 [N].
+    pub dry_pos: [R; 5],
+    /// Dry-friction polynomial `Cbar-` coefficients c0..c4 [N].
+    pub dry_neg: [R; 5],
+    /// Lower limit [m].
+    pub min: R,
+    /// Upper limit [m].
+    pub max: R,
+}
+
+impl<R: Real> AxisCoeffs<R> {
+    fn from_params(a: &AxisParams) -> Self {
+        AxisCoeffs {
+            gain: R::from_f64(a.gain),
+            visc_pos: R::from_f64(a.viscous_pos),
+            visc_neg: R::from_f64(a.viscous_neg),
+            dry_pos: a.dry_pos.map(R::from_f64),
+            dry_neg: a.dry_neg.map(R::from_f64),
+            min: R::from_f64(a.min),
+            max: R::from_f64(a.max),
+        }
+    }
+}
+
+/// Validated parameters, precomputed for the step path.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coeffs<R: Real> {
+    /// Payload mass `m_p` [kg].
+    pub mp: R,
+    /// `m_p g` [N].
+    pub mpg: R,
+    /// `M00 = m_t + m_r + Jbar_x + m_p` [kg].
+    pub m00: R,
+    /// `M11 = m_t + Jbar_y + m_p` [kg].
+    pub m11: R,
+    /// `M22 = Jbar_l + m_p` [kg].
+    pub m22: R,
+    /// Rope reflected inertia `Jbar_l` [kg].
+    pub jbar_l: R,
+    /// Swing damping `D_alpha` [kg m^2/s].
+    pub damp_alpha: R,
+    /// Swing damping `D_beta` [kg m^2/s].
+    pub damp_beta: R,
+    /// Drive axes X, Y, rope.
+    pub axes: [AxisCoeffs<R>; 3],
+}
+
+impl<R: Real> Coeffs<R> {
+    /// Precomputes from parameters (assumed validated). Sums are formed in f64 as
+    /// `NUMERICS.md` states, then rounded to `R`.
+    pub fn new(p: &Params) -> Self {
+        let mp = p.payload_mass;
+        Coeffs {
+            mp: R::from_f64(mp),
+            mpg: R::from_f64(mp * p.gravity),
+            m00: R::from_f64(p.trolley_mass + p.rail_mass + p.x.inertia + mp),
+            m11: R::from_f64(p.trolley_mass + p.y.inertia + mp),
+            m22: R::from_f64(p.rope.inertia + mp),
+            jbar_l: R::from_f64(p.rope.inertia),
+            damp_alpha: R::from_f64(p.damping_alpha),
+            damp_beta: R::from_f64(p.damping_beta),
+            axes: [
+                AxisCoeffs::from_params(&p.x),
+                AxisCoeffs::from_params(&p.y),
+                AxisCoeffs::from_params(&p.rope),
+            ],
+        }
+    }
+}
+
+/// Friction law used by [`eval`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Law<R: Real> {
+    /// The hybrid automaton: friction by mode, stopped axes held exactly.
+    Hybrid,
+    /// The smooth comparison law `tanh(gamma qd)` (gamma in s/m); modes are ignored.
+    Tanh(R),
+}
+
+/// Result of one evaluation of the dynamics.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Eval<R: Real> {
+    /// Accelerations `[xdd, ydd, Ldd, alphadd, betadd]` (0 exactly for stopped axes).
+    pub qdd: [R; 5],
+    /// Holding force [N] of each stopped drive axis (the force friction must supply, positive
+    /// along the axis); 0 for moving axes.
+    pub hold: [R; 3],
+    /// Friction force [N] of each drive axis: the law's force when moving, the holding force
+    /// when stopped.
+    pub fric: [R; 3],
+}
+
+/// Mass matrix `M(q)` (symmetric, 5x5, SI units: kg, kg m, kg m^2).
+#[inline]
+fn mass_matrix<R: Real>(c: &Coeffs<R>, l: R, sa: R, ca: R, sb: R, cb: R) -> [[R; 5]; 5] {
+    let mp = c.mp;
+    let mpl = mp * l;
+    let m02 = mp * sa * sb;
+    let m03 = mpl * ca * sb;
+    let m04 = mpl * sa * cb;
+    let m12 = mp * ca;
+    let m13 = -(mpl * sa);
+    let m33 = mpl * l;
+    let m44 = m33 * sa * sa;
+    let z = R::ZERO;
+    [
+        [c.m00, z, m02, m03, m04],
+        [z, c.m11, m12, m13, z],
+        [m02, m12, c.m22, z, z],
+        [m03, m13, z, m33, z],
+        [m04, z, z, z, m44],
+    ]
+}
+
+/// Evaluates the accelerations, holding and friction forces at state `y`, in `modes`, with
+/// (already saturated) input voltages `u` [V].
+pub fn eval<R: Real>(
+    c: &Coeffs<R>,
+    law: Law<R>,
+    y: &State<R>,
+    modes: &[Mode; 3],
+    u: &[R; 3],
+) -> Result<Eval<R>, Singular> {
+    let [_, _, l, a, b] = y.q;
+    let [_, _, ld, ad, bd] = y.qd;
+    let (sa, ca, sb, cb) = (a.sin(), a.cos(), b.sin(), b.cos());
+    let mp = c.mp;
+    let mpl = mp * l;
+    let ad2 = ad * ad;
+    let bd2 = bd * bd;
+    let two = R::TWO;
+    let z = R::ZERO;
+
+    let m = mass_matrix(c, l, sa, ca, sb, cb);
+    // Centrifugal and Coriolis terms.
+    let hv = [
+        mp * (l * (two * ad * bd * ca * cb - (ad2 + bd2) * sa * sb)
+            + two * ld * (ad * sb * ca + bd * sa * cb)),
+        -(mp * ad * (l * ad * ca + two * ld * sa)),
+        -(mpl * (ad2 + bd2 * sa * sa)),
+        mpl * (two * ld * ad - l * bd2 * sa * ca),
+        mpl * bd * (two * l * ad * sa * ca + two * ld * sa * sa),
+    ];
+    // Gravity.
+    let gv = [
+        z,
+        z,
+        -(c.mpg * sa * cb),
+        -(c.mpg * l * ca * cb),
+        c.mpg * l * sa * sb,
+    ];
+
+    // Friction of the drive axes (0 for stopped axes: the constraint holds them).
+    let mut f = [z; 3];
+    for i in 0..3 {
+        let ax = &c.axes[i];
+        f[i] = match law {
+            Law::Hybrid => hybrid(ax, modes[i], y.q[i], y.qd[i]),
+            Law::Tanh(gamma) => smooth(ax, gamma, y.q[i], y.qd[i]),
+        };
+    }
+    let qv = [
+        c.axes[0].gain * u[0] - f[0],
+        c.axes[1].gain * u[1] - f[1],
+        c.axes[2].gain * u[2] - f[2],
+        -(c.damp_alpha * ad),
+        -(c.damp_beta * bd),
+    ];
+    let mut r = [z; 5];
+    for j in 0..5 {
+        r[j] = qv[j] - hv[j] - gv[j];
+    }
+
+    // Stopped axes: qdd_i = 0 exactly, by a unit row and column.
+    let mut am = m;
+    let mut stopped = [false; 3];
+    if law == Law::Hybrid {
+        for i in 0..3 {
+            if modes[i] == Mode::Stopped {
+                stopped[i] = true;
+                for row in am.iter_mut() {
+                    row[i] = z;
+                }
+                am[i] = [z; 5];
+                am[i][i] = R::ONE;
+                r[i] = z;
+            }
+        }
+    }
+    let qdd = solve5(am, r)?;
+
+    let mut hold = [z; 3];
+    let mut fric = f;
+    for i in 0..3 {
+        if stopped[i] {
+            let row = m[i];
+            let mut s = row[0] * qdd[0];
+            for j in 1..5 {
+                s = s + row[j] * qdd[j];
+            }
+            let hf = c.axes[i].gain * u[i] - (s + hv[i] + gv[i]);
+            hold[i] = hf;
+            fric[i] = hf;
+        }
+    }
+    Ok(Eval { qdd, hold, fric })
+}

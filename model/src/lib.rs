@@ -1,0 +1,41 @@
+//! # crane-model
+//!
+//! A `no_std`, allocation-free, fixed-step hybrid model of a 3-D overhead crane (INTECO
+//! 3D-Crane) with position- and direction-dependent dry friction, after Vicente-Martinez &
+//! Ramirez-Laboreo, "A hybrid dynamic model and parameter estimation method for accurately
+//! simulating overhead cranes with friction", in the energy-consistent form of
+//! `shared/MODEL.md`.
+//!
+//! Where to look:
+//! - [`dynamics`]: the equations of motion `M(q) qdd + h + G = Q` and the holding forces.
+//! - [`modes`]: the automaton (modes, breakaway guards, resolution).
+//! - [`integrator`]: RK4, event location, resets, the bounded work per step.
+//! - [`friction`]: the hybrid and `tanh` friction laws, the dry-friction polynomial.
+//! - [`params`]: parameters, defaults, validation.
+//! - `NUMERICS.md` (next to `Cargo.toml`): the exact operation order that makes the f64 bits
+//!   the same on every platform and equal to the host reference.
+//!
+//! Units are SI throughout; coordinates `q = [x, y, L, alpha, beta]` (see [`State`]).
+
+#![no_std]
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+pub mod crane;
+pub mod dynamics;
+pub mod friction;
+pub mod integrator;
+pub mod modes;
+pub mod params;
+pub mod real;
+pub mod solve;
+pub mod state;
+
+pub use crane::{Config, Crane, FrictionLaw, Output, StepError, U_MAX};
+pub use dynamics::{Coeffs, Eval, Law};
+pub use integrator::{StepReport, MAX_SEGMENTS};
+pub use modes::Mode;
+pub use params::{AxisParams, Error, Params, Problem};
+pub use real::Real;
+pub use state::State;

@@ -1,0 +1,124 @@
+//! The hybrid automaton's discrete state: one [`Mode`] per drive axis, and the breakaway
+//! guards that move a stopped axis into motion.
+//!
+//! Transitions (paper Fig. "Hybrid model of the 3 axis dynamics", made precise in
+//! `shared/MODEL.md`):
+//! - `Positive`/`Negative` -> `Stopped` when the velocity reaches 0 (reset `qd := 0`) or the
+//!   position reaches the limit it moves towards (reset `q := limit`, `qd := 0`). These are
+//!   located inside the step by the integrator.
+//! - `Stopped` -> `Positive` when the holding force `F > Cbar+(q)`, -> `Negative` when
+//!   `F < -Cbar-(q)`; at a limit only motion away from it is allowed. Evaluated by
+//!   [`resolve`] at the start of every step and at once after every event, so a reversal
+//!   passes through `Stopped` within the same instant.
+
+use crate::dynamics::{eval, AxisCoeffs, Coeffs, Eval, Law, Singular};
+use crate::friction::dry;
+use crate::real::Real;
+use crate::state::State;
+
+/// Motion mode of one drive axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Mode {
+    /// Moving towards decreasing coordinate (`qd < 0`; for the rope: hoisting).
+    Negative,
+    /// At rest: `qd = 0` and `qdd = 0` exactly; friction holds the axis.
+    Stopped,
+    /// Moving towards increasing coordinate (`qd > 0`; for the rope: lowering).
+    Positive,
+}
+
+impl Mode {
+    /// The mode that an axis moving with velocity `v` is in (0 is `Stopped`).
+    pub fn of_velocity(v: f64) -> Mode {
+        if v > 0.0 {
+            Mode::Positive
+        } else if v < 0.0 {
+            Mode::Negative
+        } else {
+            Mode::Stopped
+        }
+    }
+}
+
+/// Breakaway margin [N] of a stopped axis for a direction: positive when the guard holds.
+///
+/// `Positive`: `hold - Cbar+(q)`; `Negative`: `-Cbar-(q) - hold`.
+pub(crate) fn margin<R: Real>(ax: &AxisCoeffs<R>, q: R, hold: R, dir: Mode) -> R {
+    match dir {
+        Mode::Negative => -dry(&ax.dry_neg, q) - hold,
+        _ => hold - dry(&ax.dry_pos, q),
+    }
+}
+
+/// The direction a stopped axis would break away in, with its positive margin, if any.
+///
+/// Motion into a limit the axis sits at is not a candidate. `Positive` wins a tie.
+pub(crate) fn candidate<R: Real>(ax: &AxisCoeffs<R>, q: R, hold: R) -> Option<(Mode, R)> {
+    let mut best: Option<(Mode, R)> = None;
+    if q < ax.max {
+        let m = margin(ax, q, hold, Mode::Positive);
+        if m > R::ZERO {
+            best = Some((Mode::Positive, m));
+        }
+    }
+    if q > ax.min {
+        let m = margin(ax, q, hold, Mode::Negative);
+        let better = match best {
+            Some((_, b)) => m > b,
+            None => m > R::ZERO,
+        };
+        if better {
+            best = Some((Mode::Negative, m));
+        }
+    }
+    best
+}
+
+/// Evaluates the breakaway guards of all stopped axes at `y` and releases them, one at a
+/// time, largest margin first; returns the dynamics evaluated in the final modes.
+///
+/// A release is kept only if the released axis then accelerates in its direction (with
+/// `qd = 0` that is what makes the new mode consistent); otherwise the axis stays stopped.
+/// Work: at most 4 evaluations of the dynamics.
+pub(crate) fn resolve<R: Real>(
+    c: &Coeffs<R>,
+    law: Law<R>,
+    y: &State<R>,
+    u: &[R; 3],
+    modes: &mut [Mode; 3],
+) -> Result<Eval<R>, Singular> {
+    let mut e = eval(c, law, y, modes, u)?;
+    let mut blocked = [false; 3];
+    for _ in 0..3 {
+        let mut best: Option<(usize, Mode, R)> = None;
+        for i in 0..3 {
+            if modes[i] != Mode::Stopped || blocked[i] {
+                continue;
+            }
+            if let Some((dir, m)) = candidate(&c.axes[i], y.q[i], e.hold[i]) {
+                let better = match best {
+                    Some((_, _, b)) => m > b,
+                    None => true,
+                };
+                if better {
+                    best = Some((i, dir, m));
+                }
+            }
+        }
+        let Some((i, dir, _)) = best else { break };
+        modes[i] = dir;
+        let e2 = eval(c, law, y, modes, u)?;
+        let consistent = match dir {
+            Mode::Positive => e2.qdd[i] > R::ZERO,
+            Mode::Negative => e2.qdd[i] < R::ZERO,
+            Mode::Stopped => false,
+        };
+        if consistent {
+            e = e2;
+        } else {
+            modes[i] = Mode::Stopped;
+            blocked[i] = true;
+        }
+    }
+    Ok(e)
+}

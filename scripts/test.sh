@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# The project's test command (README, .ci/run): installs what a fresh machine lacks, then
+# runs formatting, lints, the firmware cross build, every host test and the QEMU cross-checks.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+step() { printf '\n==> %s\n' "$*"; }
+
+step "toolchain parts"
+rustup target add thumbv7em-none-eabihf
+rustup component add rustfmt clippy >/dev/null 2>&1 || true
+if ! command -v qemu-system-arm >/dev/null 2>&1; then
+  step "installing qemu-system-arm (Debian)"
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends qemu-system-arm
+fi
+
+step "cargo fmt --check"
+cargo fmt --all -- --check
+
+step "clippy (host crates, all targets)"
+cargo clippy --workspace --all-targets -- -D warnings
+
+step "clippy (firmware, thumbv7em-none-eabihf)"
+cargo clippy -p firmware --target thumbv7em-none-eabihf -- -D warnings
+
+step "firmware cross build (release)"
+cargo build -p firmware --target thumbv7em-none-eabihf --release
+
+step "firmware under QEMU (mps2-an386)"
+timeout 300 cargo run -q -p firmware --target thumbv7em-none-eabihf --release > target/qemu-run.log
+tail -n 3 target/qemu-run.log
+
+step "host tests (including the QEMU cross-checks, marked ignored for plain cargo test)"
+cargo test --workspace --exclude firmware -- --include-ignored
