@@ -1,6 +1,7 @@
 //! The simulator object: validated parameters, state, modes, fixed step.
 
 use crate::dynamics::{eval, Coeffs, Law};
+use crate::extensions::{DelayLine, Extensions};
 use crate::integrator::{step_hybrid, step_smooth, StepReport};
 use crate::modes::Mode;
 use crate::params::{check, Error, Params, Problem};
@@ -83,7 +84,8 @@ pub struct Output<R: Real = f64> {
     /// Friction force [N] of X, Y, rope, opposing motion when moving; the holding (static
     /// friction) force when stopped, positive along the axis.
     pub friction: [R; 3],
-    /// Rope tension [N], positive when the rope pulls: `Jbar_l Ldd - (K_l u_l - f_l)`.
+    /// Rope tension [N], positive when the rope pulls: `Jbar_l Ldd - (K_l u_l - f_l)`
+    /// (plus the rope's bias force, if that extension is on).
     pub tension: R,
     /// Payload position `[x_p, y_p, z_p]` [m].
     pub payload: [R; 3],
@@ -108,6 +110,8 @@ pub struct Crane<R: Real = f64> {
     modes: [Mode; 3],
     steps: u64,
     u_last: [R; 3],
+    delay: DelayLine<R>,
+    delay_steps: [usize; 3],
 }
 
 impl<R: Real> Crane<R> {
@@ -183,7 +187,18 @@ impl<R: Real> Crane<R> {
             modes,
             steps: 0,
             u_last: [R::ZERO; 3],
+            delay: DelayLine::new(R::ZERO),
+            delay_steps: [0; 3],
         })
+    }
+
+    /// Switches on model extensions (localised friction, stiction, bias force, dead band,
+    /// input delay), validated; errors name the field (`"bumps[0].width"`...). Call before
+    /// the first step. `Extensions::default()` leaves the model unchanged, bit for bit.
+    pub fn with_extensions(mut self, ext: &Extensions) -> Result<Self, Error> {
+        self.delay_steps = ext.validate(self.h64)?;
+        self.coeffs.extend(ext);
+        Ok(self)
     }
 
     /// Advances by one step `h` with input voltages `u = [u_x, u_y, u_l]` [V], held constant
@@ -206,6 +221,22 @@ impl<R: Real> Crane<R> {
                 v
             };
         }
+        // Transport delay, then the amplifier's dead band (both off by default).
+        let mut delay = self.delay;
+        if self.delay_steps != [0; 3] {
+            uc = delay.push(uc, &self.delay_steps);
+        }
+        for (v, ax) in uc.iter_mut().zip(self.coeffs.axes.iter()) {
+            if let Some(d) = ax.deadzone {
+                *v = if *v > d {
+                    *v - d
+                } else if *v < -d {
+                    *v + d
+                } else {
+                    R::ZERO
+                };
+            }
+        }
         let (state, modes, report) = match self.law {
             Law::Hybrid => step_hybrid(&self.coeffs, self.h, &self.state, &self.modes, &uc)?,
             Law::Tanh(gamma) => {
@@ -220,6 +251,7 @@ impl<R: Real> Crane<R> {
         self.state = state;
         self.modes = modes;
         self.u_last = uc;
+        self.delay = delay;
         self.steps += 1;
         Ok(report)
     }
@@ -265,7 +297,7 @@ impl<R: Real> Crane<R> {
             &self.u_last,
         )?;
         let rope = &self.coeffs.axes[2];
-        let tension = self.coeffs.jbar_l * e.qdd[2] - (rope.gain * self.u_last[2] - e.fric[2]);
+        let tension = self.coeffs.jbar_l * e.qdd[2] - (rope.drive(self.u_last[2]) - e.fric[2]);
         Ok(Output {
             qdd: e.qdd,
             friction: e.fric,

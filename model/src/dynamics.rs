@@ -6,6 +6,7 @@
 //! replaced by the unit vector and the holding force that friction must supply is computed
 //! from the original row. The exact operation order is fixed by `NUMERICS.md`.
 
+use crate::extensions::{Direction, Extensions, MAX_BUMPS};
 use crate::friction::{hybrid, smooth};
 use crate::modes::Mode;
 use crate::params::{AxisParams, Params};
@@ -31,9 +32,43 @@ pub struct AxisCoeffs<R: Real> {
     pub min: R,
     /// Upper limit [m].
     pub max: R,
+    /// Localised friction bumps on this axis (the first `n_bumps` are used).
+    pub bumps: [BumpCoeffs<R>; MAX_BUMPS],
+    /// Number of bumps in use.
+    pub n_bumps: usize,
+    /// Stiction `(ratio, Stribeck velocity [m/s])`, if on.
+    pub stiction: Option<(R, R)>,
+    /// Constant bias force [N], if on.
+    pub offset: Option<R>,
+    /// Input dead band [V], if on.
+    pub deadzone: Option<R>,
+}
+
+/// A localised friction bump in the model's scalar type (see [`crate::Bump`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BumpCoeffs<R: Real> {
+    /// Centre [m].
+    pub center: R,
+    /// Half-width [m].
+    pub width: R,
+    /// Amplitude [N].
+    pub amplitude: R,
+    /// Applies to positive motion.
+    pub pos: bool,
+    /// Applies to negative motion.
+    pub neg: bool,
 }
 
 impl<R: Real> AxisCoeffs<R> {
+    /// Drive force [N] of input `u` [V]: `K u`, plus the bias force when on.
+    #[inline]
+    pub fn drive(&self, u: R) -> R {
+        match self.offset {
+            Some(b) => self.gain * u + b,
+            None => self.gain * u,
+        }
+    }
+
     fn from_params(a: &AxisParams) -> Self {
         AxisCoeffs {
             gain: R::from_f64(a.gain),
@@ -43,6 +78,17 @@ impl<R: Real> AxisCoeffs<R> {
             dry_neg: a.dry_neg.map(R::from_f64),
             min: R::from_f64(a.min),
             max: R::from_f64(a.max),
+            bumps: [BumpCoeffs {
+                center: R::ZERO,
+                width: R::ONE,
+                amplitude: R::ZERO,
+                pos: false,
+                neg: false,
+            }; MAX_BUMPS],
+            n_bumps: 0,
+            stiction: None,
+            offset: None,
+            deadzone: None,
         }
     }
 }
@@ -89,6 +135,43 @@ impl<R: Real> Coeffs<R> {
                 AxisCoeffs::from_params(&p.y),
                 AxisCoeffs::from_params(&p.rope),
             ],
+        }
+    }
+
+    /// Adds the (validated) extensions; effects that are off stay `None`/empty.
+    pub fn extend(&mut self, ext: &Extensions) {
+        for b in ext.bumps.iter() {
+            if let Some(ax) = self.axes.get_mut(b.axis.index()) {
+                if let Some(slot) = ax.bumps.get_mut(ax.n_bumps) {
+                    *slot = BumpCoeffs {
+                        center: R::from_f64(b.center),
+                        width: R::from_f64(b.width),
+                        amplitude: R::from_f64(b.amplitude),
+                        pos: b.direction != Direction::Negative,
+                        neg: b.direction != Direction::Positive,
+                    };
+                    ax.n_bumps += 1;
+                }
+            }
+        }
+        for (i, ax) in self.axes.iter_mut().enumerate() {
+            ax.stiction = ext
+                .stiction
+                .get(i)
+                .copied()
+                .flatten()
+                .filter(|s| s.ratio != 1.0)
+                .map(|s| (R::from_f64(s.ratio), R::from_f64(s.velocity)));
+            ax.offset = ext
+                .force_offset
+                .get(i)
+                .filter(|&&b| b != 0.0)
+                .map(|&b| R::from_f64(b));
+            ax.deadzone = ext
+                .deadzone
+                .get(i)
+                .filter(|&&d| d != 0.0)
+                .map(|&d| R::from_f64(d));
         }
     }
 }
@@ -185,9 +268,9 @@ pub fn eval<R: Real>(
         };
     }
     let qv = [
-        c.axes[0].gain * u[0] - f[0],
-        c.axes[1].gain * u[1] - f[1],
-        c.axes[2].gain * u[2] - f[2],
+        c.axes[0].drive(u[0]) - f[0],
+        c.axes[1].drive(u[1]) - f[1],
+        c.axes[2].drive(u[2]) - f[2],
         -(c.damp_alpha * ad),
         -(c.damp_beta * bd),
     ];
@@ -223,7 +306,7 @@ pub fn eval<R: Real>(
             for j in 1..5 {
                 s = s + row[j] * qdd[j];
             }
-            let hf = c.axes[i].gain * u[i] - (s + hv[i] + gv[i]);
+            let hf = c.axes[i].drive(u[i]) - (s + hv[i] + gv[i]);
             hold[i] = hf;
             fric[i] = hf;
         }

@@ -12,6 +12,8 @@
 //! - [`integrator`]: RK4, event location, resets, the bounded work per step.
 //! - [`friction`]: the hybrid and `tanh` friction laws, the dry-friction polynomial.
 //! - [`params`]: parameters, defaults, validation.
+//! - [`extensions`]: effects beyond the paper (localised friction, stiction, bias force, dead
+//!   band, input delay), off by default.
 //! - `NUMERICS.md` (next to `Cargo.toml`): the exact operation order that makes the f64 bits
 //!   the same on every platform and equal to the host reference.
 //!
@@ -24,6 +26,7 @@
 
 pub mod crane;
 pub mod dynamics;
+pub mod extensions;
 pub mod friction;
 pub mod integrator;
 pub mod modes;
@@ -34,6 +37,7 @@ pub mod state;
 
 pub use crane::{Config, Crane, FrictionLaw, Output, StepError, U_MAX};
 pub use dynamics::{Coeffs, Eval, Law};
+pub use extensions::{Axis, Bump, Direction, Extensions, Stiction, MAX_BUMPS, MAX_DELAY_STEPS};
 pub use integrator::{StepReport, MAX_SEGMENTS};
 pub use modes::Mode;
 pub use params::{AxisParams, Error, Params, Problem};

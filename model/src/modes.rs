@@ -12,7 +12,7 @@
 //!   passes through `Stopped` within the same instant.
 
 use crate::dynamics::{eval, AxisCoeffs, Coeffs, Eval, Law, Singular};
-use crate::friction::dry;
+use crate::friction::breakaway;
 use crate::real::Real;
 use crate::state::State;
 
@@ -45,8 +45,8 @@ impl Mode {
 /// `Positive`: `hold - Cbar+(q)`; `Negative`: `-Cbar-(q) - hold`.
 pub(crate) fn margin<R: Real>(ax: &AxisCoeffs<R>, q: R, hold: R, dir: Mode) -> R {
     match dir {
-        Mode::Negative => -dry(&ax.dry_neg, q) - hold,
-        _ => hold - dry(&ax.dry_pos, q),
+        Mode::Negative => -breakaway(ax, Mode::Negative, q) - hold,
+        _ => hold - breakaway(ax, Mode::Positive, q),
     }
 }
 

@@ -116,6 +116,10 @@ pub enum Problem {
     OutOfLimits,
     /// A swing angle `alpha` outside `(0, pi)`: the rope would be horizontal or above.
     AngleOutOfRange,
+    /// Must be >= 1.
+    BelowOne,
+    /// Above the fixed capacity (e.g. a delay longer than the delay line).
+    TooLarge,
 }
 
 /// A rejected parameter, configuration or initial-state field.
@@ -141,6 +145,8 @@ impl fmt::Display for Error {
             Problem::EmptyRange => "must be below the upper limit",
             Problem::OutOfLimits => "is outside the axis limits",
             Problem::AngleOutOfRange => "must be in (0, pi)",
+            Problem::BelowOne => "must be >= 1",
+            Problem::TooLarge => "exceeds the fixed capacity",
         };
         write!(f, "`{}` {} (got {})", self.field, what, self.value)
     }

@@ -42,6 +42,8 @@ pub trait Real:
     fn cos(self) -> Self;
     /// Hyperbolic tangent, from `libm`.
     fn tanh(self) -> Self;
+    /// Exponential, from `libm`.
+    fn exp(self) -> Self;
     /// `true` unless NaN or infinite.
     fn is_finite(self) -> bool;
 }
@@ -72,6 +74,10 @@ impl Real for f64 {
     #[inline]
     fn tanh(self) -> Self {
         libm::tanh(self)
+    }
+    #[inline]
+    fn exp(self) -> Self {
+        libm::exp(self)
     }
     #[inline]
     fn is_finite(self) -> bool {
@@ -105,6 +111,10 @@ impl Real for f32 {
     #[inline]
     fn tanh(self) -> Self {
         libm::tanhf(self)
+    }
+    #[inline]
+    fn exp(self) -> Self {
+        libm::expf(self)
     }
     #[inline]
     fn is_finite(self) -> bool {

@@ -1,0 +1,1 @@
+//! Identification of the crane model (placeholder).
