@@ -13,6 +13,12 @@ use core::fmt;
 /// Input voltage saturation [V], as the rig's amplifiers.
 pub const U_MAX: f64 = 12.0;
 
+/// Domain of the swing: the payload must hang below the trolley with
+/// `sin(alpha) cos(beta) >= MIN_HANG` (the cosine of the rope's angle from the vertical;
+/// 0.1 is about 84 degrees). Near the horizontal the swing coordinates are singular
+/// (`M44 = m_p L^2 sin^2 alpha`) and a taut-rope pendulum is no longer a model of the rig.
+pub const MIN_HANG: f64 = 0.1;
+
 /// Which friction law the simulator uses.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum FrictionLaw {
@@ -55,6 +61,8 @@ pub enum StepError {
     Singular,
     /// The step produced a non-finite state.
     NonFinite,
+    /// The step would take the payload out of the model's domain ([`MIN_HANG`]).
+    OutOfDomain,
 }
 
 impl fmt::Display for StepError {
@@ -66,8 +74,18 @@ impl fmt::Display for StepError {
             }
             StepError::Singular => write!(f, "mass matrix not positive definite; step rejected"),
             StepError::NonFinite => write!(f, "step gave a non-finite state; step rejected"),
+            StepError::OutOfDomain => write!(
+                f,
+                "step would swing the payload above {MIN_HANG} of the rope below the trolley; step rejected"
+            ),
         }
     }
+}
+
+/// `sin(alpha) cos(beta) >= MIN_HANG` (see [`MIN_HANG`]).
+fn in_domain<R: Real>(s: &State<R>) -> bool {
+    let hang = s.q[3].sin() * s.q[4].cos();
+    hang >= R::from_f64(MIN_HANG)
 }
 
 impl From<Singular> for StepError {
@@ -247,6 +265,9 @@ impl<R: Real> Crane<R> {
         };
         if !state.is_finite() {
             return Err(StepError::NonFinite);
+        }
+        if !in_domain(&state) {
+            return Err(StepError::OutOfDomain);
         }
         self.state = state;
         self.modes = modes;

@@ -313,3 +313,47 @@ pub fn eval<R: Real>(
     }
     Ok(Eval { qdd, hold, fric })
 }
+
+/// Plastic impact of moving drive axis `i` on its end stop, applied to the velocities.
+///
+/// The stop acts on coordinate `i` only (the bumper touches only the rail or trolley; the rope
+/// force stays finite, so the payload's velocity is continuous). The impulse `p e_i` that
+/// brings `qd_i` to zero changes the free velocities by `-(qd_i / w_i) w` with
+/// `w = M_FF^-1 e_i` (stopped axes held), and the kinetic energy by `-qd_i^2 / (2 w_i) <= 0`:
+/// an end stop never adds energy. The caller then sets `qd_i := 0` exactly.
+pub(crate) fn end_stop_impulse<R: Real>(
+    c: &Coeffs<R>,
+    y: &mut State<R>,
+    modes: &[Mode; 3],
+    i: usize,
+) -> Result<(), Singular> {
+    let [_, _, l, a, b] = y.q;
+    let (sa, ca, sb, cb) = (a.sin(), a.cos(), b.sin(), b.cos());
+    let mut am = mass_matrix(c, l, sa, ca, sb, cb);
+    let z = R::ZERO;
+    let mut held = [false; 5];
+    for (j, m) in modes.iter().enumerate() {
+        if *m == Mode::Stopped {
+            for row in am.iter_mut() {
+                row[j] = z;
+            }
+            am[j] = [z; 5];
+            am[j][j] = R::ONE;
+            held[j] = true;
+        }
+    }
+    let mut r = [z; 5];
+    r[i] = R::ONE;
+    let w = solve5(am, r)?;
+    let wi = w[i];
+    if wi.partial_cmp(&z) != Some(core::cmp::Ordering::Greater) {
+        return Err(Singular);
+    }
+    let k = y.qd[i] / wi;
+    for j in 0..5 {
+        if j != i && !held[j] {
+            y.qd[j] = y.qd[j] - k * w[j];
+        }
+    }
+    Ok(())
+}

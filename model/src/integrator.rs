@@ -9,11 +9,16 @@
 //! event by RK4 from the segment start, the reset applied, the guards re-evaluated, and the
 //! rest of the step integrated in the new modes.
 //!
+//! An axis reaching its end stop receives a plastic impact on its own coordinate
+//! ([`end_stop_impulse`](crate::dynamics)): the payload keeps its velocity and the kinetic
+//! energy can only fall.
+//!
 //! Bounded work per step: at most [`MAX_SEGMENTS`] segments, each at most 10 evaluations of
-//! the dynamics (3 RK4 stages, 3 relocation stages, 4 in the mode resolution) plus the
-//! initial resolution: 84 evaluations in the worst case, 4 in the usual step without event.
+//! the dynamics (3 RK4 stages, 3 relocation stages, 4 in the mode resolution) and 3 end-stop
+//! solves, plus the initial resolution: 108 evaluation-sized pieces of work in the worst
+//! case, 4 evaluations in the usual step without event.
 
-use crate::dynamics::{eval, Coeffs, Eval, Law, Singular};
+use crate::dynamics::{end_stop_impulse, eval, Coeffs, Eval, Law, Singular};
 use crate::modes::{candidate, margin, resolve, Mode};
 use crate::real::Real;
 use crate::state::State;
@@ -151,8 +156,15 @@ fn stop_velocity<R: Real>(c: &Coeffs<R>, y: &mut State<R>, modes: &mut [Mode; 3]
     modes[i] = Mode::Stopped;
 }
 
-/// Applies the reset of an axis that reached a limit (`q := limit`, `qd := 0`).
-fn stop_limit<R: Real>(c: &Coeffs<R>, y: &mut State<R>, modes: &mut [Mode; 3], i: usize) {
+/// Applies the reset of an axis that reached a limit: a plastic impact on its end stop
+/// ([`end_stop_impulse`]), then `q := limit`, `qd := 0`.
+fn stop_limit<R: Real>(
+    c: &Coeffs<R>,
+    y: &mut State<R>,
+    modes: &mut [Mode; 3],
+    i: usize,
+) -> Result<(), Singular> {
+    end_stop_impulse(c, y, modes, i)?;
     let ax = &c.axes[i];
     y.q[i] = if modes[i] == Mode::Positive {
         ax.max
@@ -161,22 +173,23 @@ fn stop_limit<R: Real>(c: &Coeffs<R>, y: &mut State<R>, modes: &mut [Mode; 3], i
     };
     y.qd[i] = R::ZERO;
     modes[i] = Mode::Stopped;
+    Ok(())
 }
 
 /// Resets every moving axis whose velocity or position violates its mode; returns how many.
-fn sweep<R: Real>(c: &Coeffs<R>, y: &mut State<R>, modes: &mut [Mode; 3]) -> u8 {
+fn sweep<R: Real>(c: &Coeffs<R>, y: &mut State<R>, modes: &mut [Mode; 3]) -> Result<u8, Singular> {
     let mut n = 0;
     for i in 0..3 {
         let (min, max) = (c.axes[i].min, c.axes[i].max);
         if limit_violated(modes[i], y.q[i], min, max) {
-            stop_limit(c, y, modes, i);
+            stop_limit(c, y, modes, i)?;
             n += 1;
         } else if velocity_violated(modes[i], y.qd[i]) {
             stop_velocity(c, y, modes, i);
             n += 1;
         }
     }
-    n
+    Ok(n)
 }
 
 /// What happened during one step.
@@ -263,10 +276,10 @@ pub(crate) fn step_hybrid<R: Real>(
         y = ye;
         match kind {
             Kind::Velocity => stop_velocity(c, &mut y, &mut modes, i),
-            Kind::Limit => stop_limit(c, &mut y, &mut modes, i),
+            Kind::Limit => stop_limit(c, &mut y, &mut modes, i)?,
             Kind::Breakaway => {}
         }
-        sweep(c, &mut y, &mut modes);
+        sweep(c, &mut y, &mut modes)?;
         report.events = report.events.saturating_add(1);
         done = done + s;
         e1 = resolve(c, law, &y, u, &mut modes)?;
@@ -274,7 +287,7 @@ pub(crate) fn step_hybrid<R: Real>(
             break;
         }
     }
-    report.late_resets = sweep(c, &mut y, &mut modes);
+    report.late_resets = sweep(c, &mut y, &mut modes)?;
     Ok((y, modes, report))
 }
 

@@ -22,6 +22,8 @@
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
+// Units are written in brackets, `[m]`, `[N s/m]`: they are not intra-doc links.
+#![allow(rustdoc::broken_intra_doc_links)]
 #![deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 pub mod crane;
@@ -35,7 +37,7 @@ pub mod real;
 pub mod solve;
 pub mod state;
 
-pub use crane::{Config, Crane, FrictionLaw, Output, StepError, U_MAX};
+pub use crane::{Config, Crane, FrictionLaw, Output, StepError, MIN_HANG, U_MAX};
 pub use dynamics::{Coeffs, Eval, Law};
 pub use extensions::{Axis, Bump, Direction, Extensions, Stiction, MAX_BUMPS, MAX_DELAY_STEPS};
 pub use integrator::{StepReport, MAX_SEGMENTS};

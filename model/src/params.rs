@@ -114,7 +114,8 @@ pub enum Problem {
     EmptyRange,
     /// A position outside its axis limits.
     OutOfLimits,
-    /// A swing angle `alpha` outside `(0, pi)`: the rope would be horizontal or above.
+    /// Swing angles outside the model's domain: `alpha` not in `(0, pi)`, or the payload not
+    /// hanging below the trolley (`sin(alpha) cos(beta) < MIN_HANG`).
     AngleOutOfRange,
     /// Must be >= 1.
     BelowOne,
@@ -144,7 +145,9 @@ impl fmt::Display for Error {
             Problem::Negative => "must be >= 0",
             Problem::EmptyRange => "must be below the upper limit",
             Problem::OutOfLimits => "is outside the axis limits",
-            Problem::AngleOutOfRange => "must be in (0, pi)",
+            Problem::AngleOutOfRange => {
+                "is outside the swing domain (alpha in (0, pi), sin(alpha) cos(beta) >= 0.1)"
+            }
             Problem::BelowOne => "must be >= 1",
             Problem::TooLarge => "exceeds the fixed capacity",
         };
