@@ -1,1 +1,49 @@
-//! Identification of the crane model (placeholder).
+//! # crane-ident
+//!
+//! Identification of the hybrid crane model of `crane-model` (the paper's parameter
+//! estimation), a virtual rig that records experiments as the INTECO rig would, and the
+//! data format both share (`DATA_FORMAT.md`).
+//!
+//! - [`data`]: runs (CSV) and data sets (`dataset.toml`), loading with located errors.
+//! - [`signal`]: Butterworth / Chebyshev filters, `filtfilt`, `decimate`, differences.
+//! - [`linalg`]: least squares with standard errors and correlations.
+//! - [`emps`]: the EMPS benchmark's inverse-dynamics least squares (IDIM-LS).
+//! - [`rig`]: the virtual rig (quantised encoders, ZOH saturated voltages, noise, an effect
+//!   hook) and the [`rig::Rig`] trait a real rig could implement.
+//! - [`campaign`]: the paper's experiments against any rig; [`campaign::run_rig`].
+//! - [`blr`]: Bayesian linear regression of the dry friction and the active learning.
+//! - [`identify`]: the paper's estimation pipeline; [`identify::identify`].
+//! - [`validate`]: NMAE of the payload position on validation runs; [`validate::validate`].
+//! - [`params_file`]: the model parameters as TOML.
+//!
+//! Entry points for the command line:
+//! ```no_run
+//! use crane_ident::{campaign, identify, validate};
+//! let dir = std::path::Path::new("dataset");
+//! let summary = campaign::run_rig(dir, &campaign::RigOptions::default())?;
+//! let id = identify::identify(dir)?;                 // serde: Identified
+//! id.params.write(&dir.join("identified.toml"))?;    // TOML parameter file
+//! let report = validate::validate(&id.params, dir)?; // serde: ValidationReport
+//! println!("{}", report.table());
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+// Matrix and signal code indexes several arrays with one loop variable; iterator chains
+// would hide the formulas.
+#![allow(clippy::needless_range_loop)]
+// Units are written in brackets, `[m]`, `[N s/m]`: they are not intra-doc links.
+#![allow(rustdoc::broken_intra_doc_links)]
+
+pub mod blr;
+pub mod campaign;
+pub mod data;
+pub mod emps;
+pub mod identify;
+pub mod linalg;
+pub mod params_file;
+pub mod rig;
+pub mod rng;
+pub mod signal;
+pub mod validate;

@@ -1,0 +1,171 @@
+//! Validation: simulate the model with the recorded voltages of each `validation` run from
+//! its recorded initial state, and compare payload positions. The error measure is the
+//! paper's: normalised mean absolute error per payload coordinate, normalised by the total
+//! physical range of that axis (X travel, Y travel, rope length range).
+
+use crate::data::{CraneRun, Dataset, RunKind};
+use crate::params_file::ParamsFile;
+use crane_model::{Config, Crane, FrictionLaw, Params, State};
+use serde::{Deserialize, Serialize};
+
+/// The paper's validation NMAE [%] of the payload position (x, y, z).
+pub const PAPER_NMAE_PCT: [f64; 3] = [2.59, 4.95, 0.13];
+
+/// Result on one run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RunValidation {
+    /// Run file.
+    pub run: String,
+    /// Payload [kg].
+    pub payload_kg: f64,
+    /// NMAE of payload x, y, z [%].
+    pub nmae_pct: [f64; 3],
+    /// Simulated drive positions and angles per sample `[x, y, L, alpha, beta]`, for plots.
+    #[serde(skip)]
+    pub simulated: Vec<[f64; 5]>,
+}
+
+/// Validation report.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ValidationReport {
+    /// Per run.
+    pub runs: Vec<RunValidation>,
+    /// The paper's numbers for the same measure.
+    pub paper_nmae_pct: [f64; 3],
+    /// Normalisation ranges used [m].
+    pub ranges_m: [f64; 3],
+}
+
+impl ValidationReport {
+    /// The paper's table form: axis, ours, paper.
+    pub fn table(&self) -> String {
+        let mut s = String::from(
+            "| payload coordinate | NMAE (this model) | NMAE (paper, real rig) |\n|---|---|---|\n",
+        );
+        for (i, name) in ["x_p", "y_p", "z_p"].iter().enumerate() {
+            let ours: Vec<String> = self
+                .runs
+                .iter()
+                .map(|r| format!("{:.2} %", r.nmae_pct[i]))
+                .collect();
+            s.push_str(&format!(
+                "| {name} | {} | {:.2} % |\n",
+                ours.join(", "),
+                self.paper_nmae_pct[i]
+            ));
+        }
+        s
+    }
+}
+
+/// Why validation failed.
+#[derive(Debug, thiserror::Error)]
+pub enum ValidateError {
+    /// No validation run.
+    #[error("the data set has no `validation` crane run")]
+    NoRun,
+    /// Model rejected parameters or a step.
+    #[error("{0}")]
+    Model(String),
+}
+
+fn payload(q: &[f64; 5]) -> [f64; 3] {
+    let [x, y, l, a, b] = *q;
+    let (sa, ca) = a.sin_cos();
+    let (sb, cb) = b.sin_cos();
+    [x + l * sb * sa, y + l * ca, -(l * sa * cb)]
+}
+
+/// Simulates `params` on the inputs of a crane run (model step = half the sampling period,
+/// voltages held over each sample) from the run's first recorded configuration at rest;
+/// returns the simulated `q` at every sample time.
+pub fn simulate_run(params: &Params, run: &CraneRun) -> Result<Vec<[f64; 5]>, ValidateError> {
+    let dt = run.dt();
+    let q0 = [run.x[0], run.y[0], run.l[0], run.alpha[0], run.beta[0]];
+    let mut crane: Crane = Crane::new(
+        params,
+        Config {
+            h: dt / 2.0,
+            law: FrictionLaw::Hybrid,
+        },
+        State {
+            q: q0,
+            qd: [0.0; 5],
+        },
+    )
+    .map_err(|e| ValidateError::Model(e.to_string()))?;
+    let mut out = Vec::with_capacity(run.len());
+    for k in 0..run.len() {
+        out.push(crane.state().q);
+        let u = [run.u[0][k], run.u[1][k], run.u[2][k]];
+        for _ in 0..2 {
+            crane
+                .step(u)
+                .map_err(|e| ValidateError::Model(format!("t = {}: {e}", run.t[k])))?;
+        }
+    }
+    Ok(out)
+}
+
+/// NMAE [%] of payload positions of `sim` against the record, normalised by `ranges`.
+pub fn nmae(run: &CraneRun, sim: &[[f64; 5]], ranges: [f64; 3]) -> [f64; 3] {
+    let mut acc = [0.0; 3];
+    for (k, s) in sim.iter().enumerate() {
+        let meas = payload(&[run.x[k], run.y[k], run.l[k], run.alpha[k], run.beta[k]]);
+        let simp = payload(s);
+        for i in 0..3 {
+            acc[i] += (meas[i] - simp[i]).abs();
+        }
+    }
+    let n = sim.len() as f64;
+    [0, 1, 2].map(|i| 100.0 * acc[i] / n / ranges[i])
+}
+
+/// Validates `params` on every `validation` run of a data set (payload from each run; an
+/// unloaded run simulates a 1 g hook).
+pub fn validate_dataset(
+    params: &ParamsFile,
+    ds: &Dataset,
+) -> Result<ValidationReport, ValidateError> {
+    let c = &ds.spec.constants;
+    let ranges = [
+        c.x_range_m[1] - c.x_range_m[0],
+        c.y_range_m[1] - c.y_range_m[0],
+        c.l_range_m[1] - c.l_range_m[0],
+    ];
+    let mut runs = Vec::new();
+    for run in ds.of_kind(RunKind::Validation) {
+        let Some(cr) = run.crane() else { continue };
+        let mut p = Params::from(params);
+        p.payload_mass = if run.payload_kg > 0.0 {
+            run.payload_kg
+        } else {
+            0.001
+        };
+        let sim = simulate_run(&p, cr)?;
+        runs.push(RunValidation {
+            run: run.name.clone(),
+            payload_kg: run.payload_kg,
+            nmae_pct: nmae(cr, &sim, ranges),
+            simulated: sim,
+        });
+    }
+    if runs.is_empty() {
+        return Err(ValidateError::NoRun);
+    }
+    Ok(ValidationReport {
+        runs,
+        paper_nmae_pct: PAPER_NMAE_PCT,
+        ranges_m: ranges,
+    })
+}
+
+/// Loads a data set directory and validates `params` on it.
+pub fn validate(
+    params: &ParamsFile,
+    dataset_dir: &std::path::Path,
+) -> Result<ValidationReport, ValidateError> {
+    let ds =
+        crate::data::load_dataset(dataset_dir).map_err(|e| ValidateError::Model(e.to_string()))?;
+    validate_dataset(params, &ds)
+}
