@@ -1,0 +1,102 @@
+//! Small least-squares and scoring helpers shared by the crane and single-axis pipelines.
+
+use crane_ident::linalg::solve_dense;
+
+/// Least squares `y ~ X theta` by normal equations (a handful of columns), with a tiny ridge
+/// relative to each diagonal so collinear columns give a finite answer.
+pub fn ls(cols: &[&[f64]], y: &[f64]) -> Option<Vec<f64>> {
+    let p = cols.len();
+    if p == 0 {
+        return Some(Vec::new());
+    }
+    let mut a = vec![vec![0.0; p]; p];
+    let mut b = vec![0.0; p];
+    for i in 0..p {
+        for j in i..p {
+            let s: f64 = cols[i].iter().zip(cols[j]).map(|(x, z)| x * z).sum();
+            a[i][j] = s;
+            a[j][i] = s;
+        }
+        b[i] = cols[i].iter().zip(y).map(|(x, z)| x * z).sum();
+    }
+    for (i, row) in a.iter_mut().enumerate() {
+        let d = row[i];
+        row[i] = d + 1e-10 * d.abs().max(1e-300);
+    }
+    let th = solve_dense(a, b)?;
+    th.iter().all(|v| v.is_finite()).then_some(th)
+}
+
+/// Sum of squared residuals of `y - X theta`.
+pub fn sse(cols: &[&[f64]], theta: &[f64], y: &[f64]) -> f64 {
+    let mut s = 0.0;
+    for (k, yk) in y.iter().enumerate() {
+        let pred: f64 = cols.iter().zip(theta).map(|(c, t)| c[k] * t).sum();
+        s += (yk - pred) * (yk - pred);
+    }
+    s
+}
+
+/// Mean absolute value of `y - X theta`.
+pub fn mae(cols: &[&[f64]], theta: &[f64], y: &[f64]) -> f64 {
+    let mut s = 0.0;
+    for (k, yk) in y.iter().enumerate() {
+        let pred: f64 = cols.iter().zip(theta).map(|(c, t)| c[k] * t).sum();
+        s += (yk - pred).abs();
+    }
+    s / y.len().max(1) as f64
+}
+
+/// BIC-like change on held-out data: `n ln(sse_after / sse_before) + k ln(n)`; negative is
+/// support for the extension.
+pub fn delta_bic(n: usize, sse_before: f64, sse_after: f64, k: usize) -> f64 {
+    let n = n.max(1) as f64;
+    n * (sse_after.max(1e-300) / sse_before.max(1e-300)).ln() + k as f64 * n.ln()
+}
+
+/// The localized-friction bump shape `(1 - s^2)^2` for `|s| < 1`.
+pub fn bump_shape(q: f64, center: f64, width: f64) -> f64 {
+    let s = (q - center) / width;
+    if s > -1.0 && s < 1.0 {
+        let t = 1.0 - s * s;
+        t * t
+    } else {
+        0.0
+    }
+}
+
+/// Input dead band: `|u| <= d` gives 0, else `u - sign(u) d`.
+pub fn deadband(u: f64, d: f64) -> f64 {
+    if u > d {
+        u - d
+    } else if u < -d {
+        u + d
+    } else {
+        0.0
+    }
+}
+
+/// `u` delayed by `m` half-samples (model steps of half the sampling period), averaged over
+/// each sample as a two-substep zero-order hold sees it; zero before the start.
+pub fn delay_half_samples(u: &[f64], m: usize) -> Vec<f64> {
+    let at = |j: isize| -> f64 {
+        if j < 0 {
+            0.0
+        } else {
+            u.get(j as usize).copied().unwrap_or(0.0)
+        }
+    };
+    (0..u.len())
+        .map(|k| {
+            let a = (2 * k as isize - m as isize).div_euclid(2);
+            let b = (2 * k as isize + 1 - m as isize).div_euclid(2);
+            0.5 * (at(a) + at(b))
+        })
+        .collect()
+}
+
+/// Dry-friction polynomial magnitude (clamped at zero).
+pub fn dry(c: &[f64; 5], p: f64) -> f64 {
+    let v = (((c[4] * p + c[3]) * p + c[2]) * p + c[1]) * p + c[0];
+    v.max(0.0)
+}
