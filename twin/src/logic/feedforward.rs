@@ -1,0 +1,117 @@
+//! Friction-aware feedforward: the voltages the model says a reference motion of the trolley
+//! (X, Y) and the rope needs.
+//!
+//! `F = M_red(q) a_ref + F_0(q, qd) + f(q_ref, v_ref)` per drive axis, `u = (F - d) / K`,
+//! saturated to +-12 V, where
+//! - `F_0` is the force that holds the drive axes still against the swing, Coriolis and gravity
+//!   terms (the model's holding force with all three drive axes stopped, negated);
+//! - `M_red` is the drive-axis mass matrix with the swing accelerations eliminated
+//!   (`M_dd - M_ds M_ss^-1 M_sd`; `M_ss` is diagonal);
+//! - `f` is the model's friction at the reference: `Dbar+ v + Cbar+(p)` or `Dbar- v - Cbar-(p)`
+//!   (position- and direction-dependent, localised bumps included); from standstill (the twin
+//!   holds the axis `Stopped`) the breakaway threshold (`ratio * Cbar`, times `1 + margin`) in
+//!   the direction of the reference velocity, or of the acceleration when the velocity is 0;
+//! - `d` is the observer's disturbance estimate (the friction the model gets wrong).
+
+use crane_model::friction::{breakaway, dry_at};
+use crane_model::{dynamics, Coeffs, Law, Mode, Real, State};
+
+/// Reference of the drive axes X, Y, L: position [m], velocity [m/s], acceleration [m/s^2].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reference<R: Real> {
+    /// Positions.
+    pub pos: [R; 3],
+    /// Velocities.
+    pub vel: [R; 3],
+    /// Accelerations.
+    pub acc: [R; 3],
+}
+
+/// Saturates to +-12 V; NaN gives 0.
+pub fn saturate<R: Real>(u: R) -> R {
+    let lim = R::from_f64(super::io::U_MAX);
+    if !u.is_finite() {
+        if u > R::ZERO {
+            lim
+        } else if u < R::ZERO {
+            -lim
+        } else {
+            R::ZERO
+        }
+    } else if u > lim {
+        lim
+    } else if u < -lim {
+        -lim
+    } else {
+        u
+    }
+}
+
+/// The feedforward voltages for reference `r`, with the swing state taken from `est` (the
+/// twin), standstill from `modes` (the twin's), disturbance estimate `dist` [N] and breakaway
+/// `margin` (fraction). Saturated to +-12 V; a singular evaluation gives zeros.
+pub fn voltages<R: Real>(
+    c: &Coeffs<R>,
+    est: &State<R>,
+    modes: &[Mode; 3],
+    r: &Reference<R>,
+    dist: &[R; 3],
+    margin: R,
+) -> [R; 3] {
+    let mut y = *est;
+    for i in 0..3 {
+        y.q[i] = r.pos[i];
+        y.qd[i] = r.vel[i];
+    }
+    let zero = [R::ZERO; 3];
+    let Ok(e) = dynamics::eval(c, Law::Hybrid, &y, &[Mode::Stopped; 3], &zero) else {
+        return zero;
+    };
+    let (sa, ca) = (y.q[3].sin(), y.q[3].cos());
+    let (sb, cb) = (y.q[4].sin(), y.q[4].cos());
+    let mp = c.mp;
+    let m02 = mp * sa * sb;
+    let m12 = mp * ca;
+    let mdd = [
+        [c.m00, R::ZERO, m02],
+        [R::ZERO, c.m11, m12],
+        [m02, m12, c.m22],
+    ];
+    let c3 = [ca * sb, -sa, R::ZERO];
+    let c4 = [cb, R::ZERO, R::ZERO];
+    let one = R::ONE;
+    let mut u = [R::ZERO; 3];
+    for i in 0..3 {
+        let mut f = -e.hold[i];
+        for j in 0..3 {
+            let mred = mdd[i][j] - mp * (c3[i] * c3[j] + c4[i] * c4[j]);
+            f = f + mred * r.acc[j];
+        }
+        let ax = &c.axes[i];
+        let (p, v, a) = (r.pos[i], r.vel[i], r.acc[i]);
+        let dir = if v > R::ZERO {
+            Mode::Positive
+        } else if v < R::ZERO {
+            Mode::Negative
+        } else if modes[i] == Mode::Stopped && a > R::ZERO {
+            Mode::Positive
+        } else if modes[i] == Mode::Stopped && a < R::ZERO {
+            Mode::Negative
+        } else {
+            Mode::Stopped
+        };
+        let dry = match dir {
+            Mode::Stopped => R::ZERO,
+            d if modes[i] == Mode::Stopped => breakaway(ax, d, p) * (one + margin),
+            d => dry_at(ax, d, p),
+        };
+        let fr = match dir {
+            Mode::Positive => ax.visc_pos * v + dry,
+            Mode::Negative => ax.visc_neg * v - dry,
+            Mode::Stopped => R::ZERO,
+        };
+        let bias = ax.offset.unwrap_or(R::ZERO);
+        u[i] = saturate((f + fr - dist[i] - bias) / ax.gain);
+    }
+    u
+}
