@@ -82,6 +82,70 @@ impl fmt::Display for StepError {
     }
 }
 
+/// Checks a state given from outside (finite, positions within limits, swing in its domain)
+/// and derives the modes from the velocities; an axis at a limit moving into it gets
+/// `qd = +0.0`. Velocities of `-0.0` are kept as given (and are `Stopped`).
+fn admit<R: Real>(c: &Coeffs<R>, init: &State<f64>) -> Result<(State<R>, [Mode; 3]), Error> {
+    const Q: [&str; 5] = [
+        "state.q[0]",
+        "state.q[1]",
+        "state.q[2]",
+        "state.q[3]",
+        "state.q[4]",
+    ];
+    const QD: [&str; 5] = [
+        "state.qd[0]",
+        "state.qd[1]",
+        "state.qd[2]",
+        "state.qd[3]",
+        "state.qd[4]",
+    ];
+    for ((name, v), (dname, dv)) in Q.iter().zip(init.q).zip(QD.iter().zip(init.qd)) {
+        check(name, v, Problem::NotFinite)?;
+        check(dname, dv, Problem::NotFinite)?;
+    }
+    let q = init.q;
+    let mut qd = init.qd;
+    let mut modes = [Mode::Stopped; 3];
+    for (i, ax) in c.axes.iter().enumerate() {
+        let (min, max) = (ax.min.to_f64(), ax.max.to_f64());
+        let (p, v) = (q[i], qd[i]);
+        if p < min || p > max {
+            return Err(Error {
+                field: Q[i],
+                problem: Problem::OutOfLimits,
+                value: p,
+            });
+        }
+        if (p >= max && v > 0.0) || (p <= min && v < 0.0) {
+            qd[i] = 0.0;
+        }
+        modes[i] = Mode::of_velocity(qd[i]);
+    }
+    let alpha = q[3];
+    if !(alpha > 0.0 && alpha < core::f64::consts::PI) {
+        return Err(Error {
+            field: Q[3],
+            problem: Problem::AngleOutOfRange,
+            value: alpha,
+        });
+    }
+    if !in_domain(&State { q, qd }) {
+        return Err(Error {
+            field: Q[4],
+            problem: Problem::AngleOutOfRange,
+            value: q[4],
+        });
+    }
+    Ok((
+        State {
+            q: q.map(R::from_f64),
+            qd: qd.map(R::from_f64),
+        },
+        modes,
+    ))
+}
+
 /// `sin(alpha) cos(beta) >= MIN_HANG` (see [`MIN_HANG`]).
 fn in_domain<R: Real>(s: &State<R>) -> bool {
     let hang = s.q[3].sin() * s.q[4].cos();
@@ -148,60 +212,15 @@ impl<R: Real> Crane<R> {
                 Law::Tanh(R::from_f64(gamma))
             }
         };
-        const Q: [&str; 5] = [
-            "state.q[0]",
-            "state.q[1]",
-            "state.q[2]",
-            "state.q[3]",
-            "state.q[4]",
-        ];
-        const QD: [&str; 5] = [
-            "state.qd[0]",
-            "state.qd[1]",
-            "state.qd[2]",
-            "state.qd[3]",
-            "state.qd[4]",
-        ];
-        for ((name, v), (dname, dv)) in Q.iter().zip(init.q).zip(QD.iter().zip(init.qd)) {
-            check(name, v, Problem::NotFinite)?;
-            check(dname, dv, Problem::NotFinite)?;
-        }
-        let mut q = init.q;
-        let mut qd = init.qd;
-        let mut modes = [Mode::Stopped; 3];
-        for (i, ax) in params.axes().iter().enumerate() {
-            let (p, v) = (q[i], qd[i]);
-            if p < ax.min || p > ax.max {
-                return Err(Error {
-                    field: Q[i],
-                    problem: Problem::OutOfLimits,
-                    value: p,
-                });
-            }
-            if (p >= ax.max && v > 0.0) || (p <= ax.min && v < 0.0) {
-                qd[i] = 0.0;
-            }
-            modes[i] = Mode::of_velocity(qd[i]);
-            q[i] = p;
-        }
-        let alpha = q[3];
-        if !(alpha > 0.0 && alpha < core::f64::consts::PI) {
-            return Err(Error {
-                field: Q[3],
-                problem: Problem::AngleOutOfRange,
-                value: alpha,
-            });
-        }
+        let coeffs = Coeffs::new(params);
+        let (state, modes) = admit(&coeffs, &init)?;
         let h = R::from_f64(config.h);
         Ok(Crane {
-            coeffs: Coeffs::new(params),
+            coeffs,
             law,
             h,
             h64: config.h,
-            state: State {
-                q: q.map(R::from_f64),
-                qd: qd.map(R::from_f64),
-            },
+            state,
             modes,
             steps: 0,
             u_last: [R::ZERO; 3],
@@ -275,6 +294,16 @@ impl<R: Real> Crane<R> {
         self.delay = delay;
         self.steps += 1;
         Ok(report)
+    }
+
+    /// Replaces the state (e.g. an observer's correction), with the checks and mode rules of
+    /// [`Crane::new`]; parameters, extensions, delay line, step count and last input are kept.
+    /// On error nothing changes.
+    pub fn set_state(&mut self, state: State<f64>) -> Result<(), Error> {
+        let (state, modes) = admit(&self.coeffs, &state)?;
+        self.state = state;
+        self.modes = modes;
+        Ok(())
     }
 
     /// Current state.
