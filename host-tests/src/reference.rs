@@ -1,9 +1,11 @@
 //! Independent reference implementation of the hybrid crane model (f64, `std`).
 //!
 //! Written directly from `shared/MODEL.md` (equations, conventions) and `model/NUMERICS.md`
-//! (the floating-point contract). It is meant to be read as the specification: plain
-//! functions on plain arrays, one expression per line of the contract, in the contract's
-//! operation order, so that `crane_model` must reproduce it bit for bit.
+//! (the floating-point contract, including the end-stop impulse, the swing domain and the
+//! "Extensions" section). It is meant to be read as the specification: plain functions on
+//! plain arrays, one expression per line of the contract, in the contract's operation order,
+//! so that `crane_model` must reproduce it bit for bit. Where the contract allows more than
+//! one reading, `host-tests/CONTRACT_NOTES.md` lists the one chosen.
 //!
 //! Conventions (SI units throughout):
 //! - `q = [x, y, L, alpha, beta]`: rail position X [m], trolley position Y [m], rope length L
@@ -17,6 +19,16 @@
 //! expression below is written so that this left-to-right association is the contract's.
 //! No `mul_add`, no `powi`; `sin`, `cos`, `tanh` come from `libm`.
 
+// The code mirrors NUMERICS.md line by line: index loops as in the contract, `a = a - f * b`
+// spelled out like the contract's pseudo-code (same IEEE result as `-=`), the explicit
+// saturation, and `!(pivot > 0.0)`, which is the contract's NaN-rejecting pivot test.
+#![allow(
+    clippy::needless_range_loop,
+    clippy::assign_op_pattern,
+    clippy::manual_clamp,
+    clippy::neg_cmp_op_on_partial_ord
+)]
+
 use std::fmt;
 
 /// Voltage saturation [V].
@@ -25,6 +37,13 @@ pub const U_SAT: f64 = 12.0;
 pub const MAX_SEGMENTS: usize = 8;
 /// Bisection iterations of the Hermite event location.
 pub const BISECTION_ITERATIONS: usize = 30;
+/// Domain of the swing coordinates: a state is accepted only if
+/// `sin(alpha) * cos(beta) >= MIN_HANG` (NUMERICS.md "Domain").
+pub const MIN_HANG: f64 = 0.1;
+/// Largest input delay in steps (NUMERICS.md "Extensions": `n_i` at most 63).
+pub const MAX_DELAY_STEPS: usize = 63;
+/// Largest number of friction bumps (the model's fixed capacity).
+pub const MAX_BUMPS: usize = 4;
 
 /// Motion mode of one drive axis.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -176,7 +195,11 @@ impl RefParams {
             pos("gain", a.gain)?;
             nonneg("viscous_pos", a.visc_pos)?;
             nonneg("viscous_neg", a.visc_neg)?;
-            if a.dry_pos.iter().chain(a.dry_neg.iter()).any(|c| !c.is_finite()) {
+            if a.dry_pos
+                .iter()
+                .chain(a.dry_neg.iter())
+                .any(|c| !c.is_finite())
+            {
                 return Err(RefError::InvalidParam("dry"));
             }
             if !(a.min.is_finite() && a.max.is_finite() && a.min < a.max) {
@@ -219,6 +242,71 @@ impl From<crane_model::Params> for RefParams {
     }
 }
 
+/// A localised change of the dry-friction magnitude of one drive axis (NUMERICS.md
+/// "Extensions"): `amplitude * (1 - s^2)^2` for `|s| < 1`, `s = (q - center) / width`, added
+/// to the polynomial before its clamp at zero.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RefBump {
+    /// Drive axis 0 (X), 1 (Y), 2 (rope).
+    pub axis: usize,
+    /// Centre [m].
+    pub center: f64,
+    /// Half-width of the support [m] (> 0).
+    pub width: f64,
+    /// Peak change [N] (negative: a dip).
+    pub amplitude: f64,
+    /// Applies to the `Positive` direction (`C_plus`).
+    pub pos: bool,
+    /// Applies to the `Negative` direction (`C_minus`).
+    pub neg: bool,
+}
+
+/// The model extensions of NUMERICS.md "Extensions" in the reference's own terms. The
+/// default is "all off", which adds no floating-point operation.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RefExtensions {
+    /// Friction bumps, in insertion order (at most [`MAX_BUMPS`]).
+    pub bumps: Vec<RefBump>,
+    /// Stiction `(ratio, vs)` per drive axis: `ratio >= 1` (1 is off), `vs > 0` [m/s].
+    pub stiction: [Option<(f64, f64)>; 3],
+    /// Bias force `b` per drive axis [N] (0 is off): the drive force is `K u + b`.
+    pub bias: [f64; 3],
+    /// Dead band `d` per drive axis [V] (>= 0; 0 is off).
+    pub dead_band: [f64; 3],
+    /// Input delay per drive axis [s] (>= 0), `round(delay / h)` steps, at most 63.
+    pub delay: [f64; 3],
+}
+
+impl From<&crane_model::Extensions> for RefExtensions {
+    /// Copies the model's public extension fields into the reference's own struct.
+    fn from(e: &crane_model::Extensions) -> Self {
+        use crane_model::{Axis, Direction};
+        let bumps = e
+            .bumps
+            .iter()
+            .map(|b| RefBump {
+                axis: match b.axis {
+                    Axis::X => 0,
+                    Axis::Y => 1,
+                    Axis::Rope => 2,
+                },
+                center: b.center,
+                width: b.width,
+                amplitude: b.amplitude,
+                pos: matches!(b.direction, Direction::Positive | Direction::Both),
+                neg: matches!(b.direction, Direction::Negative | Direction::Both),
+            })
+            .collect();
+        RefExtensions {
+            bumps,
+            stiction: e.stiction.map(|s| s.map(|s| (s.ratio, s.velocity))),
+            bias: e.force_offset,
+            dead_band: e.deadzone,
+            delay: e.delay,
+        }
+    }
+}
+
 /// Why the reference refused something.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum RefError {
@@ -230,10 +318,15 @@ pub enum RefError {
     InvalidState(&'static str),
     /// An input voltage is NaN or infinite; nothing changed.
     NonFiniteInput,
+    /// The extensions are out of range (field name).
+    InvalidExtension(&'static str),
     /// A pivot of the mass matrix was not `> 0`; the step was rejected.
     Singular,
     /// The state after the step was not finite; the step was rejected.
     NonFiniteState,
+    /// The state after the step left the domain `sin(alpha) cos(beta) >= MIN_HANG`; the step
+    /// was rejected.
+    OutOfDomain,
 }
 
 impl fmt::Display for RefError {
@@ -242,9 +335,11 @@ impl fmt::Display for RefError {
             RefError::InvalidParam(n) => write!(f, "invalid parameter `{n}`"),
             RefError::InvalidConfig(n) => write!(f, "invalid configuration `{n}`"),
             RefError::InvalidState(n) => write!(f, "invalid initial state `{n}`"),
+            RefError::InvalidExtension(n) => write!(f, "invalid extension `{n}`"),
             RefError::NonFiniteInput => write!(f, "non-finite input"),
             RefError::Singular => write!(f, "singular mass matrix"),
             RefError::NonFiniteState => write!(f, "non-finite state"),
+            RefError::OutOfDomain => write!(f, "state outside the swing domain"),
         }
     }
 }
@@ -323,18 +418,44 @@ pub struct RefStepInfo {
     pub late_resets: usize,
 }
 
-/// Horner evaluation of a dry-friction polynomial, clamped at 0 [N].
-pub fn dry_friction(c: &[f64; 5], p: f64) -> f64 {
+/// Horner sum `c0 + c1 p + ... + c4 p^4` of a dry-friction polynomial, not clamped [N].
+pub fn horner(c: &[f64; 5], p: f64) -> f64 {
     let mut acc = c[4];
     acc = acc * p + c[3];
     acc = acc * p + c[2];
     acc = acc * p + c[1];
     acc = acc * p + c[0];
+    acc
+}
+
+/// Horner evaluation of a dry-friction polynomial, clamped at 0 [N].
+pub fn dry_friction(c: &[f64; 5], p: f64) -> f64 {
+    clamp_at_zero(horner(c, p))
+}
+
+/// `if acc > 0 { acc } else { 0 }` (NaN gives 0).
+fn clamp_at_zero(acc: f64) -> f64 {
     if acc > 0.0 {
         acc
     } else {
         0.0
     }
+}
+
+/// The dead band `d` of NUMERICS.md "Extensions" (`d > 0`).
+pub fn dead_band(u: f64, d: f64) -> f64 {
+    if u > d {
+        u - d
+    } else if u < -d {
+        u + d
+    } else {
+        0.0
+    }
+}
+
+/// `sin(alpha) * cos(beta) >= MIN_HANG` (NUMERICS.md "Domain"; false for NaN).
+pub fn in_domain(q: &[f64; 5]) -> bool {
+    libm::sin(q[3]) * libm::cos(q[4]) >= MIN_HANG
 }
 
 /// Voltage saturation to +-12 V (the input is already known to be finite).
@@ -420,18 +541,27 @@ pub struct RefCrane {
     modes: [RefMode; 3],
     /// Accepted steps.
     n: u64,
-    /// Saturated input of the last accepted step (0 before the first step).
+    /// Input `u` of `eval` in the last accepted step (saturated, delayed, dead band; 0 before
+    /// the first step).
     u_last: [f64; 3],
+    /// Extensions (all off unless `with_extensions`).
+    ext: RefExtensions,
+    /// Input delay per axis in steps, `round(delay_i / h)`.
+    delay_steps: [usize; 3],
+    /// Saturated inputs pushed into the delay line by the accepted steps, oldest first (only
+    /// the last `MAX_DELAY_STEPS` are kept).
+    pushed: std::collections::VecDeque<[f64; 3]>,
 }
 
 impl RefCrane {
     /// Builds the reference crane.
     ///
-    /// Initial modes follow the sign of the initial drive velocities (`0.0` -> Stopped, and
-    /// the velocity is then stored as `+0.0`); an axis at (or beyond) the limit it moves
-    /// towards starts Stopped with zero velocity. Rejects invalid parameters, `h` not finite
-    /// and > 0, `gamma` not finite and > 0, and initial states that are not finite, have a
-    /// drive position outside its limits or `alpha` outside `(0, pi)`.
+    /// Initial modes follow the sign of the initial drive velocities (`0.0` or `-0.0` ->
+    /// Stopped, the zero kept as given, NUMERICS.md "Initial states"); an axis at the limit it
+    /// moves towards starts Stopped with velocity `+0.0`. Rejects invalid parameters, `h` not
+    /// finite and > 0, `gamma` not finite and > 0, and initial states that are not finite,
+    /// have a drive position outside its limits, `alpha` outside `(0, pi)` or are outside the
+    /// swing domain `sin(alpha) cos(beta) >= MIN_HANG` (`InvalidState("q[4]")`).
     pub fn new(
         params: RefParams,
         h: f64,
@@ -458,21 +588,22 @@ impl RefCrane {
             }
         }
         if !(q0[3] > 0.0 && q0[3] < core::f64::consts::PI) {
-            return Err(RefError::InvalidState("alpha"));
+            return Err(RefError::InvalidState("q[3]"));
+        }
+        if !in_domain(&q0) {
+            return Err(RefError::InvalidState("q[4]"));
         }
         let q = q0;
         let mut qd = qd0;
         let mut modes = [RefMode::Stopped; 3];
         for i in 0..3 {
             let a = &params.axes[i];
-            modes[i] = if qd[i] > 0.0 && q[i] < a.max {
-                RefMode::Positive
-            } else if qd[i] < 0.0 && q[i] > a.min {
-                RefMode::Negative
-            } else {
+            // Moving into the limit it sits at: starts stopped with velocity 0.0.
+            if (qd[i] > 0.0 && q[i] >= a.max) || (qd[i] < 0.0 && q[i] <= a.min) {
                 qd[i] = 0.0;
-                RefMode::Stopped
-            };
+            }
+            // 0.0 and -0.0 are Stopped; the given zero is kept as it is (CONTRACT_NOTES D3).
+            modes[i] = RefMode::of_velocity(qd[i]);
         }
         let p = params;
         Ok(RefCrane {
@@ -487,7 +618,63 @@ impl RefCrane {
             modes,
             n: 0,
             u_last: [0.0; 3],
+            ext: RefExtensions::default(),
+            delay_steps: [0; 3],
+            pushed: std::collections::VecDeque::new(),
         })
+    }
+
+    /// Switches on the extensions of NUMERICS.md "Extensions" (before the first step).
+    /// Rejects non-finite or out-of-range fields, more than [`MAX_BUMPS`] bumps and delays of
+    /// more than [`MAX_DELAY_STEPS`] steps.
+    pub fn with_extensions(mut self, ext: &RefExtensions) -> Result<Self, RefError> {
+        let bad = RefError::InvalidExtension;
+        if ext.bumps.len() > MAX_BUMPS {
+            return Err(bad("bumps"));
+        }
+        for b in &ext.bumps {
+            if b.axis > 2 {
+                return Err(bad("bumps.axis"));
+            }
+            if !(b.center.is_finite() && b.amplitude.is_finite()) {
+                return Err(bad("bumps.center/amplitude"));
+            }
+            if !(b.width.is_finite() && b.width > 0.0) {
+                return Err(bad("bumps.width"));
+            }
+        }
+        for i in 0..3 {
+            if let Some((ratio, vs)) = ext.stiction[i] {
+                if !(ratio.is_finite() && ratio >= 1.0) {
+                    return Err(bad("stiction.ratio"));
+                }
+                if !(vs.is_finite() && vs > 0.0) {
+                    return Err(bad("stiction.velocity"));
+                }
+            }
+            if !ext.bias[i].is_finite() {
+                return Err(bad("bias"));
+            }
+            if !(ext.dead_band[i].is_finite() && ext.dead_band[i] >= 0.0) {
+                return Err(bad("dead_band"));
+            }
+            let d = ext.delay[i];
+            if !(d.is_finite() && d >= 0.0) {
+                return Err(bad("delay"));
+            }
+            let n = libm::round(d / self.h);
+            if n > MAX_DELAY_STEPS as f64 {
+                return Err(bad("delay"));
+            }
+            self.delay_steps[i] = n as usize;
+        }
+        self.ext = ext.clone();
+        Ok(self)
+    }
+
+    /// The extensions in use.
+    pub fn extensions(&self) -> &RefExtensions {
+        &self.ext
     }
 
     /// Parameters in use.
@@ -518,13 +705,73 @@ impl RefCrane {
     pub fn steps(&self) -> u64 {
         self.n
     }
-    /// Saturated input of the last accepted step.
+    /// The input `u` that `eval` used in the last accepted step (saturated, then delayed and
+    /// dead-banded when those extensions are on).
     pub fn last_input(&self) -> [f64; 3] {
         self.u_last
     }
     /// Step size [s].
     pub fn h(&self) -> f64 {
         self.h
+    }
+
+    /// Dry-friction magnitude `C` of axis `i` for direction `dir` (`Positive`: `C_plus`,
+    /// otherwise `C_minus`) at position `qi` [N]: the Horner sum, plus the bumps of this
+    /// axis and direction in insertion order, then clamped at 0 (NUMERICS.md "Extensions").
+    /// Without bumps this is exactly `dry_friction`.
+    pub fn dry(&self, i: usize, dir: RefMode, qi: f64) -> f64 {
+        let a = &self.p.axes[i];
+        let positive = dir == RefMode::Positive;
+        let mut acc = horner(if positive { &a.dry_pos } else { &a.dry_neg }, qi);
+        for b in &self.ext.bumps {
+            let applies = if positive { b.pos } else { b.neg };
+            if b.axis != i || !applies {
+                continue;
+            }
+            let s = (qi - b.center) / b.width;
+            if s > -1.0 && s < 1.0 {
+                let t = 1.0 - s * s;
+                acc = acc + b.amplitude * t * t;
+            }
+        }
+        clamp_at_zero(acc)
+    }
+
+    /// Stiction of axis `i`, if on (`ratio != 1`).
+    fn stiction(&self, i: usize) -> Option<(f64, f64)> {
+        self.ext.stiction[i].filter(|&(ratio, _)| ratio != 1.0)
+    }
+
+    /// The `C` of the hybrid law's moving friction: `C * (1 + (ratio - 1) exp(-(x x)))`,
+    /// `x = qd_i / vs`, with stiction; `C` without.
+    fn sliding(&self, i: usize, dir: RefMode, qi: f64, qdi: f64) -> f64 {
+        let c = self.dry(i, dir, qi);
+        match self.stiction(i) {
+            Some((ratio, vs)) => {
+                let x = qdi / vs;
+                c * (1.0 + (ratio - 1.0) * libm::exp(-(x * x)))
+            }
+            None => c,
+        }
+    }
+
+    /// The `C` of the breakaway margins: `ratio * C` with stiction, `C` without.
+    fn threshold(&self, i: usize, dir: RefMode, qi: f64) -> f64 {
+        let c = self.dry(i, dir, qi);
+        match self.stiction(i) {
+            Some((ratio, _)) => ratio * c,
+            None => c,
+        }
+    }
+
+    /// Drive force of axis `i` [N]: `K u`, or `K u + b` with a (nonzero) bias force.
+    fn drive(&self, i: usize, ui: f64) -> f64 {
+        let b = self.ext.bias[i];
+        if b != 0.0 {
+            self.p.axes[i].gain * ui + b
+        } else {
+            self.p.axes[i].gain * ui
+        }
     }
 
     fn is_stopped(&self, modes: &[RefMode; 3], j: usize) -> bool {
@@ -559,20 +806,7 @@ impl RefCrane {
         let bd2 = bd * bd;
 
         // Mass matrix [kg, kg m, kg m^2].
-        let m02 = m_p * sa * sb;
-        let m03 = mpl * ca * sb;
-        let m04 = mpl * sa * cb;
-        let m12 = m_p * ca;
-        let m13 = -(mpl * sa);
-        let m33 = mpl * l;
-        let m44 = m33 * sa * sa;
-        let m = [
-            [self.m00, 0.0, m02, m03, m04],
-            [0.0, self.m11, m12, m13, 0.0],
-            [m02, m12, self.m22, 0.0, 0.0],
-            [m03, m13, 0.0, m33, 0.0],
-            [m04, 0.0, 0.0, 0.0, m44],
-        ];
+        let m = self.mass_matrix(q);
 
         // Velocity (Coriolis/centrifugal) terms [N, N m].
         let h0 = m_p
@@ -590,23 +824,24 @@ impl RefCrane {
         let g4 = self.mpg * l * sa * sb;
         let gv = [0.0, 0.0, g2, g3, g4];
 
-        // Friction of the drive axes [N], opposing motion.
+        // Friction of the drive axes [N], opposing motion. Stiction acts on the hybrid law's
+        // moving friction only (CONTRACT_NOTES.md, readings).
         let mut f = [0.0_f64; 3];
         for i in 0..3 {
             let a = &p.axes[i];
+            let pos = RefMode::Positive;
+            let neg = RefMode::Negative;
             f[i] = match self.law {
                 RefLaw::Hybrid => match modes[i] {
-                    RefMode::Positive => a.visc_pos * qd[i] + dry_friction(&a.dry_pos, q[i]),
-                    RefMode::Negative => a.visc_neg * qd[i] - dry_friction(&a.dry_neg, q[i]),
+                    RefMode::Positive => a.visc_pos * qd[i] + self.sliding(i, pos, q[i], qd[i]),
+                    RefMode::Negative => a.visc_neg * qd[i] - self.sliding(i, neg, q[i], qd[i]),
                     RefMode::Stopped => 0.0,
                 },
                 RefLaw::Tanh { gamma } => {
                     if qd[i] > 0.0 {
-                        a.visc_pos * qd[i]
-                            + dry_friction(&a.dry_pos, q[i]) * libm::tanh(gamma * qd[i])
+                        a.visc_pos * qd[i] + self.dry(i, pos, q[i]) * libm::tanh(gamma * qd[i])
                     } else {
-                        a.visc_neg * qd[i]
-                            + dry_friction(&a.dry_neg, q[i]) * libm::tanh(gamma * qd[i])
+                        a.visc_neg * qd[i] + self.dry(i, neg, q[i]) * libm::tanh(gamma * qd[i])
                     }
                 }
             };
@@ -614,9 +849,9 @@ impl RefCrane {
 
         // Generalised forces and right-hand side r = (Q - h) - G.
         let qf = [
-            p.axes[0].gain * u[0] - f[0],
-            p.axes[1].gain * u[1] - f[1],
-            p.axes[2].gain * u[2] - f[2],
+            self.drive(0, u[0]) - f[0],
+            self.drive(1, u[1]) - f[1],
+            self.drive(2, u[2]) - f[2],
             -(p.d_alpha * ad),
             -(p.d_beta * bd),
         ];
@@ -648,7 +883,7 @@ impl RefCrane {
                 for j in 1..5 {
                     s = s + m[i][j] * qdd[j];
                 }
-                hold[i] = p.axes[i].gain * u[i] - (s + hv[i] + gv[i]);
+                hold[i] = self.drive(i, u[i]) - (s + hv[i] + gv[i]);
                 fric[i] = hold[i];
             }
         }
@@ -673,7 +908,7 @@ impl RefCrane {
             }
         }
         if let Some(down) = self.margin(i, qi, hold, RefMode::Negative) {
-            if down > 0.0 && best.map_or(true, |b| down > b.1) {
+            if down > 0.0 && (best.is_none() || best.is_some_and(|b| down > b.1)) {
                 best = Some((RefMode::Negative, down));
             }
         }
@@ -685,8 +920,8 @@ impl RefCrane {
     fn margin(&self, i: usize, qi: f64, hold: f64, dir: RefMode) -> Option<f64> {
         let a = &self.p.axes[i];
         match dir {
-            RefMode::Positive => (qi < a.max).then(|| hold - dry_friction(&a.dry_pos, qi)),
-            RefMode::Negative => (qi > a.min).then(|| -dry_friction(&a.dry_neg, qi) - hold),
+            RefMode::Positive => (qi < a.max).then(|| hold - self.threshold(i, dir, qi)),
+            RefMode::Negative => (qi > a.min).then(|| -self.threshold(i, dir, qi) - hold),
             RefMode::Stopped => None,
         }
     }
@@ -707,7 +942,7 @@ impl RefCrane {
                     continue;
                 }
                 if let Some((dir, m)) = self.candidate(i, y.q[i], e.hold[i]) {
-                    if pick.map_or(true, |b| m > b.2) {
+                    if pick.is_none() || pick.is_some_and(|b| m > b.2) {
                         pick = Some((i, dir, m));
                     }
                 }
@@ -796,8 +1031,52 @@ impl RefCrane {
         }
     }
 
-    /// Limit reset: `q_i := limit moved towards`, `qd_i := 0`, Stopped.
-    fn reset_limit(&self, y: &mut RefState, modes: &mut [RefMode; 3], i: usize) {
+    /// End-stop impulse of moving axis `i` (NUMERICS.md "End-stop impulse"): a plastic
+    /// impact on coordinate `i` only, with the modes as they are before the axis stops.
+    /// `w = A^-1 e_i` with `A = M(q)`, rows and columns of stopped axes replaced by `e_j`;
+    /// every free velocity `j != i` changes by `-(qd_i / w_i) w_j` (`qd_i` itself is set to 0
+    /// by the caller). The kinetic energy falls by `qd_i^2 / (2 w_i)`.
+    fn end_stop_impulse(
+        &self,
+        y: &mut RefState,
+        modes: &[RefMode; 3],
+        i: usize,
+    ) -> Result<(), RefError> {
+        let mut a = self.mass_matrix(&y.q);
+        for j in 0..3 {
+            if self.is_stopped(modes, j) {
+                for k in 0..5 {
+                    a[j][k] = 0.0;
+                    a[k][j] = 0.0;
+                }
+                a[j][j] = 1.0;
+            }
+        }
+        let mut e = [0.0_f64; 5];
+        e[i] = 1.0;
+        let w = solve5(a, e)?;
+        if !(w[i] > 0.0) {
+            return Err(RefError::Singular);
+        }
+        let k = y.qd[i] / w[i];
+        for j in 0..5 {
+            if j == i || self.is_stopped(modes, j) {
+                continue;
+            }
+            y.qd[j] = y.qd[j] - k * w[j];
+        }
+        Ok(())
+    }
+
+    /// Limit reset: end-stop impulse, then `q_i := limit moved towards`, `qd_i := 0`,
+    /// Stopped.
+    fn reset_limit(
+        &self,
+        y: &mut RefState,
+        modes: &mut [RefMode; 3],
+        i: usize,
+    ) -> Result<(), RefError> {
+        self.end_stop_impulse(y, modes, i)?;
         let a = &self.p.axes[i];
         y.q[i] = if modes[i] == RefMode::Positive {
             a.max
@@ -806,17 +1085,31 @@ impl RefCrane {
         };
         y.qd[i] = 0.0;
         modes[i] = RefMode::Stopped;
+        Ok(())
     }
 
-    /// Velocity reset: `qd_i := 0`, Stopped.
-    fn reset_velocity(y: &mut RefState, modes: &mut [RefMode; 3], i: usize) {
+    /// Velocity reset: `qd_i := 0`, `q_i` clamped into `[min_i, max_i]`, Stopped.
+    fn reset_velocity(&self, y: &mut RefState, modes: &mut [RefMode; 3], i: usize) {
+        let a = &self.p.axes[i];
         y.qd[i] = 0.0;
+        let qi = y.q[i];
+        y.q[i] = if qi > a.max {
+            a.max
+        } else if qi < a.min {
+            a.min
+        } else {
+            qi
+        };
         modes[i] = RefMode::Stopped;
     }
 
-    /// Resets every moving axis of `y` with a limit (first) or velocity violation.
-    /// Returns how many were reset.
-    fn reset_violations(&self, y: &mut RefState, modes: &mut [RefMode; 3]) -> usize {
+    /// Resets every moving axis of `y` with a limit (first) or velocity violation, axis by
+    /// axis in the order 0, 1, 2. Returns how many were reset.
+    fn reset_violations(
+        &self,
+        y: &mut RefState,
+        modes: &mut [RefMode; 3],
+    ) -> Result<usize, RefError> {
         let mut n = 0;
         for i in 0..3 {
             let mode = modes[i];
@@ -824,22 +1117,19 @@ impl RefCrane {
                 continue;
             }
             if self.limit_violated(i, mode, y.q[i]) {
-                self.reset_limit(y, modes, i);
+                self.reset_limit(y, modes, i)?;
                 n += 1;
             } else if Self::velocity_violated(mode, y.qd[i]) {
-                Self::reset_velocity(y, modes, i);
+                self.reset_velocity(y, modes, i);
                 n += 1;
             }
         }
-        n
+        Ok(n)
     }
 
     /// One hybrid step of length `h` with saturated input `u` (NUMERICS.md "One step").
     /// Works on copies; returns the new state and modes without committing them.
-    fn hybrid_step(
-        &self,
-        u: [f64; 3],
-    ) -> Result<(RefState, [RefMode; 3], RefStepInfo), RefError> {
+    fn hybrid_step(&self, u: [f64; 3]) -> Result<(RefState, [RefMode; 3], RefStepInfo), RefError> {
         let h = self.h;
         let mut info = RefStepInfo::default();
         let mut y = self.y;
@@ -856,7 +1146,7 @@ impl RefCrane {
             let mut first: Option<(f64, usize, RefEventKind, RefMode)> = None;
             let mut consider = |theta: f64, i: usize, kind: RefEventKind, dir: RefMode| {
                 any = true;
-                if first.map_or(true, |f| theta < f.0) {
+                if first.is_none() || first.is_some_and(|f| theta < f.0) {
                     first = Some((theta, i, kind, dir));
                 }
             };
@@ -867,27 +1157,20 @@ impl RefCrane {
                         if Self::velocity_violated(mode, yn.qd[i]) {
                             let (v0, v1) = (y.qd[i], yn.qd[i]);
                             let (s0, s1) = (tau * e1.qdd[i], tau * e4.qdd[i]);
+                            // Still moving at mid: the event predicate is false there
+                            // (a NaN counts as still moving).
                             let theta = bisect(|th| {
                                 let v = hermite(th, v0, s0, v1, s1);
-                                if mode == RefMode::Positive {
-                                    v > 0.0
-                                } else {
-                                    v < 0.0
-                                }
+                                !Self::velocity_violated(mode, v)
                             });
                             consider(theta, i, RefEventKind::Velocity, mode);
                         }
                         if self.limit_violated(i, mode, yn.q[i]) {
                             let (p0, p1) = (y.q[i], yn.q[i]);
                             let (s0, s1) = (tau * y.qd[i], tau * yn.qd[i]);
-                            let a = &self.p.axes[i];
                             let theta = bisect(|th| {
                                 let p = hermite(th, p0, s0, p1, s1);
-                                if mode == RefMode::Positive {
-                                    p < a.max
-                                } else {
-                                    p > a.min
-                                }
+                                !self.limit_violated(i, mode, p)
                             });
                             consider(theta, i, RefEventKind::Limit, mode);
                         }
@@ -919,11 +1202,11 @@ impl RefCrane {
             let (yr, _) = self.rk4(&y, &e1, s, &modes, u)?;
             y = yr;
             match kind {
-                RefEventKind::Velocity => Self::reset_velocity(&mut y, &mut modes, i),
-                RefEventKind::Limit => self.reset_limit(&mut y, &mut modes, i),
+                RefEventKind::Velocity => self.reset_velocity(&mut y, &mut modes, i),
+                RefEventKind::Limit => self.reset_limit(&mut y, &mut modes, i)?,
                 RefEventKind::Breakaway => {}
             }
-            self.reset_violations(&mut y, &mut modes);
+            self.reset_violations(&mut y, &mut modes)?;
             info.events.push(RefEvent {
                 axis: i,
                 kind,
@@ -938,7 +1221,7 @@ impl RefCrane {
             }
         }
         // Late events: violations left at the end of the step.
-        info.late_resets = self.reset_violations(&mut y, &mut modes);
+        info.late_resets = self.reset_violations(&mut y, &mut modes)?;
         Ok((y, modes, info))
     }
 
@@ -965,15 +1248,46 @@ impl RefCrane {
         Ok(y)
     }
 
+    /// The input path of one step (NUMERICS.md "Extensions"): `sat` is the saturated input;
+    /// returns the `u` of `eval`. Reads the delay line without pushing (`step` pushes `sat`
+    /// only when the step is accepted).
+    fn input_of_step(&self, sat: [f64; 3]) -> [f64; 3] {
+        let mut u = sat;
+        for i in 0..3 {
+            let n = self.delay_steps[i];
+            if n > 0 {
+                // After pushing `sat`, the vector pushed `n` pushes ago is the `n`-th newest
+                // of the earlier pushes; zeros before the start.
+                let len = self.pushed.len();
+                u[i] = if len >= n {
+                    self.pushed[len - n][i]
+                } else {
+                    0.0
+                };
+            }
+        }
+        for i in 0..3 {
+            let d = self.ext.dead_band[i];
+            if d != 0.0 {
+                u[i] = dead_band(u[i], d);
+            }
+        }
+        u
+    }
+
     /// Advances one sample `h` with the voltages `u` [V] held constant.
     ///
-    /// A non-finite input is rejected; otherwise it is saturated to +-12 V. On any error the
-    /// state, the modes, the time and the last input stay as they were.
+    /// A non-finite input is rejected; otherwise it is saturated to +-12 V, then delayed and
+    /// dead-banded if those extensions are on. A step whose evaluation fails (`Singular`),
+    /// whose result is not finite (`NonFiniteState`) or is outside the swing domain
+    /// (`OutOfDomain`) is rejected. On any error the state, the modes, the time, the last
+    /// input and the delay line stay as they were.
     pub fn step(&mut self, u: [f64; 3]) -> Result<RefStepInfo, RefError> {
         if u.iter().any(|v| !v.is_finite()) {
             return Err(RefError::NonFiniteInput);
         }
-        let uc = [saturate(u[0]), saturate(u[1]), saturate(u[2])];
+        let sat = [saturate(u[0]), saturate(u[1]), saturate(u[2])];
+        let uc = self.input_of_step(sat);
         let (y, modes, info) = match self.law {
             RefLaw::Hybrid => self.hybrid_step(uc)?,
             RefLaw::Tanh { .. } => {
@@ -993,10 +1307,19 @@ impl RefCrane {
         if y.q.iter().chain(y.qd.iter()).any(|v| !v.is_finite()) {
             return Err(RefError::NonFiniteState);
         }
+        if !in_domain(&y.q) {
+            return Err(RefError::OutOfDomain);
+        }
         self.y = y;
         self.modes = modes;
         self.n += 1;
         self.u_last = uc;
+        if self.ext.delay.iter().any(|&d| d != 0.0) {
+            self.pushed.push_back(sat);
+            if self.pushed.len() > MAX_DELAY_STEPS {
+                self.pushed.pop_front();
+            }
+        }
         Ok(info)
     }
 
@@ -1014,28 +1337,29 @@ impl RefCrane {
         Ok(RefOutput {
             qdd: e.qdd,
             friction: e.fric,
-            tension: rope.inertia * e.qdd[2] - (rope.gain * self.u_last[2] - e.fric[2]),
+            tension: rope.inertia * e.qdd[2] - (self.drive(2, self.u_last[2]) - e.fric[2]),
             payload: [q[0] + l * sb * sa, q[1] + l * ca, -(l * sa * cb)],
         })
     }
 
-    /// The full mass matrix `M(q)` (not part of the contract; for energy checks).
+    /// The full mass matrix `M(q)` (NUMERICS.md "One evaluation"; also used for energy).
+    /// Entries [kg, kg m, kg m^2]; assembled directly, so it exists where M is singular.
     pub fn mass_matrix(&self, q: &[f64; 5]) -> [[f64; 5]; 5] {
-        let y = RefState { q: *q, qd: [0.0; 5] };
-        // Assemble directly (no solve) so it also works where M would be singular.
         let m_p = self.p.m_p;
         let sa = libm::sin(q[3]);
         let ca = libm::cos(q[3]);
         let sb = libm::sin(q[4]);
         let cb = libm::cos(q[4]);
-        let mpl = m_p * y.q[2];
+        let l = q[2];
+        let mpl = m_p * l;
         let m02 = m_p * sa * sb;
         let m03 = mpl * ca * sb;
         let m04 = mpl * sa * cb;
         let m12 = m_p * ca;
         let m13 = -(mpl * sa);
-        let m33 = mpl * q[2];
+        let m33 = mpl * l;
         let m44 = m33 * sa * sa;
+        // M01 = M14 = M23 = M24 = M34 = 0; symmetric.
         [
             [self.m00, 0.0, m02, m03, m04],
             [0.0, self.m11, m12, m13, 0.0],
