@@ -39,7 +39,10 @@ pub const MAX_SEGMENTS: usize = 8;
 pub const BISECTION_ITERATIONS: usize = 30;
 /// Domain of the swing coordinates: a state is accepted only if
 /// `sin(alpha) * cos(beta) >= MIN_HANG` (NUMERICS.md "Domain").
-pub const MIN_HANG: f64 = 0.1;
+pub const MIN_HANG: f64 = 0.02;
+
+/// Swing stops [rad] from the vertical, per angle (NUMERICS.md "Swing stops").
+pub const SWING_STOP: f64 = 1.4;
 /// Largest input delay in steps (NUMERICS.md "Extensions": `n_i` at most 63).
 pub const MAX_DELAY_STEPS: usize = 63;
 /// Largest number of friction bumps (the model's fixed capacity).
@@ -416,6 +419,8 @@ pub struct RefStepInfo {
     pub events: Vec<RefEvent>,
     /// Number of moving axes reset after the segment loop (late events).
     pub late_resets: usize,
+    /// Number of swing angles stopped at their swing stop at the end of the step.
+    pub swing_stops: usize,
 }
 
 /// Horner sum `c0 + c1 p + ... + c4 p^4` of a dry-friction polynomial, not clamped [N].
@@ -589,6 +594,13 @@ impl RefCrane {
         }
         if !(q0[3] > 0.0 && q0[3] < core::f64::consts::PI) {
             return Err(RefError::InvalidState("q[3]"));
+        }
+        let half_pi = core::f64::consts::FRAC_PI_2;
+        if !(q0[3] >= half_pi - SWING_STOP && q0[3] <= half_pi + SWING_STOP) {
+            return Err(RefError::InvalidState("q[3]"));
+        }
+        if !(q0[4] >= -SWING_STOP && q0[4] <= SWING_STOP) {
+            return Err(RefError::InvalidState("q[4]"));
         }
         if !in_domain(&q0) {
             return Err(RefError::InvalidState("q[4]"));
@@ -1222,6 +1234,32 @@ impl RefCrane {
         }
         // Late events: violations left at the end of the step.
         info.late_resets = self.reset_violations(&mut y, &mut modes)?;
+        // Swing stops: an angle beyond its stop is clamped to it; if it still moves outwards
+        // it first gets the end-stop impulse on its own coordinate and a zero rate.
+        let half_pi = core::f64::consts::FRAC_PI_2;
+        for (j, lo, hi) in [
+            (3, half_pi - SWING_STOP, half_pi + SWING_STOP),
+            (4, -SWING_STOP, SWING_STOP),
+        ] {
+            let qj = y.q[j];
+            if qj > hi || qj < lo {
+                let outward = if qj > hi {
+                    y.qd[j] > 0.0
+                } else {
+                    y.qd[j] < 0.0
+                };
+                if outward {
+                    self.end_stop_impulse(&mut y, &modes, j)?;
+                    y.qd[j] = 0.0;
+                }
+                y.q[j] = if qj > hi { hi } else { lo };
+                info.swing_stops += 1;
+            }
+        }
+        // The swing-stop impulse changes the drive velocities too: reset any violation again.
+        if info.swing_stops > 0 {
+            info.late_resets += self.reset_violations(&mut y, &mut modes)?;
+        }
         Ok((y, modes, info))
     }
 

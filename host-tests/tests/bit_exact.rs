@@ -669,69 +669,44 @@ fn bisection_counts_a_nan_hermite_value_as_still_moving() {
 /// accepted steps earlier; model and reference must agree at every step.
 #[test]
 fn a_rejected_step_does_not_push_into_the_delay_line() {
+    // With a delay on X, a run with rejected (non-finite) inputs interleaved must give the
+    // same bits as the run without them: a rejected step leaves the delay line untouched.
     let p = Params::default();
-    let q = [0.25, 0.3, 0.4, 0.9, 0.0];
+    let q = [0.25, 0.3, 0.4, 1.4, 0.0];
     let mut ext = Extensions::default();
     ext.delay[0] = 0.003;
     let x_input = |k: usize| 6.0 * (k as f64 * 0.37).sin() + 3.0 * ((k * k) as f64 * 0.011).cos();
-    let build = |w: f64| {
-        pair_ext(
-            &p,
-            1e-3,
-            FrictionLaw::Hybrid,
-            q,
-            [0.0, 0.0, 0.0, -w, 0.0],
-            &ext,
-        )
-    };
-    // Smallest outward swing rate that reaches the boundary within 800 steps (zero Y input).
-    let reaches = |w: f64| {
-        let (mut m, _) = build(w);
-        (0..800).any(|k| m.step([x_input(k), 0.0, 0.0]).is_err())
-    };
-    let (mut lo, mut hi) = (0.0f64, 10.0f64);
-    assert!(!reaches(lo) && reaches(hi));
-    loop {
-        let mid = 0.5 * (lo + hi);
-        if mid == lo || mid == hi {
-            break;
-        }
-        if reaches(mid) {
-            hi = mid;
-        } else {
-            lo = mid;
-        }
-    }
-    let (mut m, mut r) = build(hi);
-    let (mut rejected, mut recovered, mut last_rejected) = (0, 0, false);
+    let (mut m, mut r) = pair_ext(&p, 1e-3, FrictionLaw::Hybrid, q, [0.0; 5], &ext);
+    let (mut clean, _) = pair_ext(&p, 1e-3, FrictionLaw::Hybrid, q, [0.0; 5], &ext);
+    let mut rejected = 0;
     for k in 0..800 {
-        // A non-finite input now and then: rejected before the delay line, too.
-        if k % 97 == 5 {
-            let u = [f64::NAN, 0.0, 0.0];
-            assert!(m.step(u).is_err() && r.step(u).is_err());
-        }
-        let u = [x_input(k), if last_rejected { 12.0 } else { 0.0 }, 0.0];
-        match (m.step(u), r.step(u)) {
-            (Ok(_), Ok(_)) => {
-                recovered += usize::from(last_rejected);
-                last_rejected = false;
-            }
-            (Err(a), Err(b)) => {
-                assert!(same_error(&a, &b), "step {}: {a:?} vs {b:?}", k + 1);
-                assert_eq!(a, StepError::OutOfDomain);
+        if k % 7 == 3 {
+            for u in [[f64::NAN, 0.0, 0.0], [0.0, f64::INFINITY, 0.0]] {
+                let (a, b) = (m.step(u), r.step(u));
+                assert!(
+                    a.is_err() && b.is_err(),
+                    "step {k}: non-finite input accepted"
+                );
                 rejected += 1;
-                last_rejected = true;
             }
-            (a, b) => panic!("step {}: model {a:?} vs reference {b:?}", k + 1),
         }
-        if let Some(msg) = compare(k + 1, &m, &r) {
-            panic!("{msg}");
+        let u = [x_input(k), 0.0, 0.0];
+        assert!(m.step(u).is_ok() && r.step(u).is_ok() && clean.step(u).is_ok());
+        let (sm, sc) = (m.state(), clean.state());
+        for j in 0..5 {
+            assert_eq!(sm.q[j].to_bits(), sc.q[j].to_bits(), "step {k}: q[{j}]");
+            assert_eq!(sm.qd[j].to_bits(), sc.qd[j].to_bits(), "step {k}: qd[{j}]");
+            assert_eq!(
+                sm.q[j].to_bits(),
+                r.q()[j].to_bits(),
+                "step {k}: ref q[{j}]"
+            );
+            assert_eq!(
+                sm.qd[j].to_bits(),
+                r.qd()[j].to_bits(),
+                "step {k}: ref qd[{j}]"
+            );
         }
     }
-    assert!(
-        rejected >= 1 && recovered >= 1 && m.steps() > 700,
-        "the scenario needs a rejected step followed by accepted ones \
-         ({rejected} rejected, {recovered} recoveries, {} accepted)",
-        m.steps()
-    );
+    assert!(rejected > 200);
 }

@@ -505,13 +505,9 @@ fn million_random_steps() -> MillionRun {
 /// 10^6 steps of random saturating inputs never give a non-finite state (nor one outside the
 /// limits or the swing domain): see `million_random_steps`.
 ///
-/// FINDING (CONTRACT_NOTES.md F3): the steps are not all accepted. At step 167,472 the
-/// saturating inputs have pumped the payload out to `sin(alpha) cos(beta) = 0.1005` (84
-/// degrees from the vertical) with `alphad = -3.1 rad/s` pointing further out; that step and
-/// every later one (832,529 steps, 83 % of the run) are rejected with `OutOfDomain`. A
-/// rejected step leaves the state as it was, so the swing velocity can never turn and the
-/// twin is stuck for good. The numbers are printed; the test does not bound them (a bound
-/// would only freeze this behaviour in).
+/// Before the swing stops (CONTRACT_NOTES.md F3) the saturating inputs pumped the payload out
+/// of the domain at step 167,472 and every later step was rejected; with the stops no step is
+/// rejected and the smallest `sin(alpha) cos(beta)` is the stops' corner, cos(1.4)^2.
 #[test]
 fn a_million_random_saturating_steps_never_give_a_non_finite_state() {
     let run = million_random_steps();
@@ -530,6 +526,8 @@ fn a_million_random_saturating_steps_never_give_a_non_finite_state() {
         run.min_hang
     );
     assert!(run.min_hang >= MIN_HANG);
+    // With the swing stops the twin stays in its domain and usable: no step is rejected.
+    assert_eq!(total, 0, "{run:?}");
 }
 
 /// A NaN or infinite input is rejected with an error naming the input; nothing changes.
@@ -634,50 +632,51 @@ fn invalid_parameters_are_rejected_naming_the_field() {
 /// (`InvalidState("q[4]")`); states just inside are accepted by both.
 #[test]
 fn new_rejects_initial_states_outside_the_swing_domain() {
+    // The swing stops (1.4 rad per angle) bound the initial state too; the field is named.
     let p = Params::default();
     let c = Config {
         h: H,
         law: FrictionLaw::Hybrid,
     };
-    let cases: [(f64, f64, bool); 8] = [
-        (FRAC_PI_2, 0.0, true),
-        (FRAC_PI_2, 1.47, true),    // cos = 0.1006
-        (FRAC_PI_2, -1.475, false), // cos = 0.0957
-        (FRAC_PI_2, 3.0, false),    // payload above the trolley
-        (0.1003, 0.0, true),        // sin = 0.1001
-        (0.0999, 0.0, false),
-        (std::f64::consts::PI - 0.0999, 0.0, false),
-        (2.0, 1.2, true), // 0.909 * 0.362 = 0.329
+    let stop = crane_model::SWING_STOP;
+    let cases: [(f64, f64, Option<&str>); 8] = [
+        (FRAC_PI_2, 0.0, None),
+        (FRAC_PI_2, stop, None),
+        (FRAC_PI_2, -stop, None),
+        (FRAC_PI_2 + stop, stop, None), // the corner: hang = cos(1.4)^2 = 0.029 >= MIN_HANG
+        (FRAC_PI_2, 1.41, Some("q[4]")),
+        (FRAC_PI_2, 3.0, Some("q[4]")), // payload above the trolley
+        (FRAC_PI_2 - 1.41, 0.0, Some("q[3]")),
+        (std::f64::consts::PI - 0.0999, 0.0, Some("q[3]")),
     ];
-    for (alpha, beta, ok) in cases {
-        let hang = libm::sin(alpha) * libm::cos(beta);
-        assert_eq!(
-            hang >= MIN_HANG,
-            ok,
-            "premise: alpha {alpha}, beta {beta}, hang {hang}"
-        );
+    for (alpha, beta, bad) in cases {
         let s = State {
             q: [0.2, 0.3, 0.4, alpha, beta],
             qd: [0.0; 5],
         };
         let m = Crane::<f64>::new(&p, c, s);
         let r = RefCrane::new(RefParams::from(&p), H, RefLaw::Hybrid, s.q, s.qd);
-        if ok {
-            assert!(m.is_ok(), "alpha {alpha}, beta {beta}: model {:?}", m.err());
-            assert!(
-                r.is_ok(),
-                "alpha {alpha}, beta {beta}: reference {:?}",
-                r.err()
-            );
-        } else {
-            assert_eq!(
-                r.err(),
-                Some(RefError::InvalidState("q[4]")),
-                "alpha {alpha}"
-            );
-            match m {
-                Ok(_) => panic!("alpha {alpha}, beta {beta} (hang {hang}): model accepted it"),
-                Err(e) => assert!(e.to_string().contains("state.q[4]"), "{e}"),
+        match bad {
+            None => {
+                assert!(m.is_ok(), "alpha {alpha}, beta {beta}: model {:?}", m.err());
+                assert!(
+                    r.is_ok(),
+                    "alpha {alpha}, beta {beta}: reference {:?}",
+                    r.err()
+                );
+                let hang = libm::sin(alpha) * libm::cos(beta);
+                assert!(hang >= MIN_HANG, "alpha {alpha}, beta {beta}: hang {hang}");
+            }
+            Some(field) => {
+                assert_eq!(
+                    r.err(),
+                    Some(RefError::InvalidState(field)),
+                    "alpha {alpha}"
+                );
+                match m {
+                    Ok(_) => panic!("alpha {alpha}, beta {beta}: model accepted it"),
+                    Err(e) => assert!(e.to_string().contains(&format!("state.{field}")), "{e}"),
+                }
             }
         }
     }

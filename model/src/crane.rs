@@ -14,10 +14,11 @@ use core::fmt;
 pub const U_MAX: f64 = 12.0;
 
 /// Domain of the swing: the payload must hang below the trolley with
-/// `sin(alpha) cos(beta) >= MIN_HANG` (the cosine of the rope's angle from the vertical;
-/// 0.1 is about 84 degrees). Near the horizontal the swing coordinates are singular
-/// (`M44 = m_p L^2 sin^2 alpha`) and a taut-rope pendulum is no longer a model of the rig.
-pub const MIN_HANG: f64 = 0.1;
+/// `sin(alpha) cos(beta) >= MIN_HANG` (the cosine of the rope's angle from the vertical).
+/// The swing stops ([`SWING_STOP`](crate::integrator::SWING_STOP), 1.4 rad per angle) keep
+/// every state at or above `cos(1.4)^2 = 0.029`, so this check is a last guard; initial
+/// states below it are rejected.
+pub const MIN_HANG: f64 = 0.02;
 
 /// Which friction law the simulator uses.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -128,6 +129,21 @@ fn admit<R: Real>(c: &Coeffs<R>, init: &State<f64>) -> Result<(State<R>, [Mode; 
             field: Q[3],
             problem: Problem::AngleOutOfRange,
             value: alpha,
+        });
+    }
+    let (half_pi, stop) = (core::f64::consts::FRAC_PI_2, crate::integrator::SWING_STOP);
+    if !(alpha >= half_pi - stop && alpha <= half_pi + stop) {
+        return Err(Error {
+            field: Q[3],
+            problem: Problem::AngleOutOfRange,
+            value: alpha,
+        });
+    }
+    if !(q[4] >= -stop && q[4] <= stop) {
+        return Err(Error {
+            field: Q[4],
+            problem: Problem::AngleOutOfRange,
+            value: q[4],
         });
     }
     if !in_domain(&State { q, qd }) {

@@ -200,6 +200,49 @@ pub struct StepReport {
     /// Resets applied at the end of the step without location, because the step ran out of
     /// segments ([`MAX_SEGMENTS`]). Normally 0.
     pub late_resets: u8,
+    /// Swing angles stopped at [`SWING_STOP`] at the end of the step. Normally 0.
+    pub swing_stops: u8,
+}
+
+/// Swing stops [rad]: each swing angle is kept within this angle of the vertical
+/// (`alpha in [pi/2 - SWING_STOP, pi/2 + SWING_STOP]`, `beta in [-SWING_STOP, SWING_STOP]`),
+/// about 80 degrees. Beyond them the swing coordinates approach their singularity
+/// (`M44 = m_p L^2 sin^2 alpha`) and a taut-rope pendulum is no longer a model of the rig; a
+/// (virtual) stop there is a plastic impact on that angle, so the twin stays in its domain
+/// and usable whatever the inputs.
+pub const SWING_STOP: f64 = 1.4;
+
+/// Applies the swing stops at the end of a step: an angle beyond its stop is clamped to it
+/// and, if still moving outwards, receives the end-stop impulse and `qd := 0`.
+fn swing_stops<R: Real>(
+    c: &Coeffs<R>,
+    y: &mut State<R>,
+    modes: &[Mode; 3],
+) -> Result<u8, Singular> {
+    let half_pi = core::f64::consts::FRAC_PI_2;
+    let bounds = [
+        (3, half_pi - SWING_STOP, half_pi + SWING_STOP),
+        (4, -SWING_STOP, SWING_STOP),
+    ];
+    let mut n = 0;
+    for (j, lo, hi) in bounds {
+        let (lo, hi) = (R::from_f64(lo), R::from_f64(hi));
+        let q = y.q[j];
+        if q > hi || q < lo {
+            let outward = if q > hi {
+                y.qd[j] > R::ZERO
+            } else {
+                y.qd[j] < R::ZERO
+            };
+            if outward {
+                end_stop_impulse(c, y, modes, j)?;
+                y.qd[j] = R::ZERO;
+            }
+            y.q[j] = clamp(q, lo, hi);
+            n += 1;
+        }
+    }
+    Ok(n)
 }
 
 /// Advances the hybrid automaton by `h` with held input `u` (already saturated).
@@ -288,6 +331,11 @@ pub(crate) fn step_hybrid<R: Real>(
         }
     }
     report.late_resets = sweep(c, &mut y, &mut modes)?;
+    report.swing_stops = swing_stops(c, &mut y, &modes)?;
+    if report.swing_stops > 0 {
+        // The swing-stop impulse changes the drive velocities too: stop any it reversed.
+        report.late_resets += sweep(c, &mut y, &mut modes)?;
+    }
     Ok((y, modes, report))
 }
 

@@ -40,7 +40,7 @@ pub mod state;
 pub use crane::{Config, Crane, FrictionLaw, Output, StepError, MIN_HANG, U_MAX};
 pub use dynamics::{Coeffs, Eval, Law};
 pub use extensions::{Axis, Bump, Direction, Extensions, Stiction, MAX_BUMPS, MAX_DELAY_STEPS};
-pub use integrator::{StepReport, MAX_SEGMENTS};
+pub use integrator::{StepReport, MAX_SEGMENTS, SWING_STOP};
 pub use modes::Mode;
 pub use params::{AxisParams, Error, Params, Problem};
 pub use real::Real;

@@ -114,8 +114,8 @@ pub enum Problem {
     EmptyRange,
     /// A position outside its axis limits.
     OutOfLimits,
-    /// Swing angles outside the model's domain: `alpha` not in `(0, pi)`, or the payload not
-    /// hanging below the trolley (`sin(alpha) cos(beta) < MIN_HANG`).
+    /// Swing angles outside the model's domain: beyond the swing stops
+    /// (`alpha` within `pi/2 +- SWING_STOP`, `beta` within `+-SWING_STOP`).
     AngleOutOfRange,
     /// Must be >= 1.
     BelowOne,
@@ -146,7 +146,7 @@ impl fmt::Display for Error {
             Problem::EmptyRange => "must be below the upper limit",
             Problem::OutOfLimits => "is outside the axis limits",
             Problem::AngleOutOfRange => {
-                "is outside the swing domain (alpha in (0, pi), sin(alpha) cos(beta) >= 0.1)"
+                "is outside the swing stops (alpha within pi/2 +- 1.4, beta within +-1.4 rad)"
             }
             Problem::BelowOne => "must be >= 1",
             Problem::TooLarge => "exceeds the fixed capacity",
