@@ -1,8 +1,10 @@
 //! The `crane` command line: the virtual rig, identification, validation and the
-//! discrepancy workbench, with built-in defaults so `crane demo` runs the whole story.
+//! discrepancy workbench, with built-in defaults so `crane demo` runs the whole story; the
+//! paper's simulation study (`crane study`) and Monte Carlo throughput (`crane mc`).
 
 mod plot;
 mod story;
+mod study_cmd;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -67,6 +69,42 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// The paper's simulation study: wall time and velocity RMSE of the hybrid model and of
+    /// tanh(gamma v) friction (ode45 and fixed-step RK4) in its two cases, against a
+    /// high-accuracy hybrid reference; the paper's table and its two figures (SVG).
+    Study {
+        /// Output directory (figures, study.json).
+        #[arg(long, default_value = "out")]
+        out: PathBuf,
+        /// Print machine-readable results (JSON) instead of the table.
+        #[arg(long)]
+        json: bool,
+        /// Skip the fixed-step RK4 search and the hybrid equal-accuracy search (faster).
+        #[arg(long)]
+        quick: bool,
+        /// Wall-time budget per timed model [s] (runs repeated, fastest reported).
+        #[arg(long, default_value_t = 0.3)]
+        budget: f64,
+    },
+    /// Monte Carlo over friction uncertainty (case 1, trolley friction +-30 %) on all cores:
+    /// throughput and the spread of the trolley's end position.
+    Mc {
+        /// Number of simulations.
+        #[arg(long, default_value_t = 1000)]
+        sims: usize,
+        /// Simulated time of each [s].
+        #[arg(long, default_value_t = 10.0)]
+        duration: f64,
+        /// Model step [s].
+        #[arg(long, default_value_t = 1e-3)]
+        h: f64,
+        /// Seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Print machine-readable results (JSON).
+        #[arg(long)]
+        json: bool,
+    },
     /// Find what the simulation gets wrong on measured data, name the cause, extend the model
     /// and measure the gain on held-out data.
     Diagnose {
@@ -101,6 +139,19 @@ fn main() {
             plots,
             json,
         } => story::validate(&dataset, &params, &plots, json).map(|_| ()),
+        Command::Study {
+            out,
+            json,
+            quick,
+            budget,
+        } => study_cmd::study(&out, json, quick, budget),
+        Command::Mc {
+            sims,
+            duration,
+            h,
+            seed,
+            json,
+        } => study_cmd::mc(sims, duration, h, seed, json),
         Command::Diagnose {
             dataset,
             params,

@@ -1,0 +1,27 @@
+//! # crane-tools
+//!
+//! Host tooling around the hybrid crane model (`crane_model`): the simulation study of the
+//! paper (hybrid friction against `tanh(gamma v)` smoothing) and its pieces, usable from the
+//! `crane` binary, the tests and the benches.
+//!
+//! - [`cases`]: the paper's two simulation cases, with every value the paper leaves open fixed.
+//! - [`smooth`]: the comparison dynamics (`tanh` friction, axes outside a case held exactly)
+//!   and the bare dynamics without friction logic, on the model's own `dynamics::eval`; fixed
+//!   step RK4.
+//! - [`ode45`]: Dormand-Prince 5(4) with error control and dense output (MATLAB's `ode45`).
+//! - [`reference`]: fixed-step hybrid runs, the high-accuracy reference and its convergence
+//!   check.
+//! - [`study`]: the study itself (wall time and velocity RMSE per model and case, the largest
+//!   stable RK4 step, the hybrid step at equal accuracy) and the paper's table.
+//! - [`figures`]: the paper's two figures (SVG).
+//! - [`montecarlo`]: many independent simulations over friction uncertainty on all cores.
+
+#![forbid(unsafe_code)]
+
+pub mod cases;
+pub mod figures;
+pub mod montecarlo;
+pub mod ode45;
+pub mod reference;
+pub mod smooth;
+pub mod study;
