@@ -3,6 +3,7 @@
 //! paper's simulation study (`crane study`) and Monte Carlo throughput (`crane mc`).
 
 mod plot;
+mod simulate;
 mod story;
 mod study_cmd;
 
@@ -65,6 +66,17 @@ enum Command {
         /// Directory for the plots (SVG).
         #[arg(long, default_value = "out/plots")]
         plots: PathBuf,
+        /// Print machine-readable results (JSON).
+        #[arg(long)]
+        json: bool,
+    },
+    /// Simulate a scenario file (TOML; default: the validation multisine) into a CSV run.
+    Simulate {
+        /// Scenario file (see `tools/src/simulate.rs` for the format); default: built in.
+        scenario: Option<PathBuf>,
+        /// CSV file to write.
+        #[arg(long, default_value = "out/simulation.csv")]
+        out: PathBuf,
         /// Print machine-readable results (JSON).
         #[arg(long)]
         json: bool,
@@ -139,6 +151,11 @@ fn main() {
             plots,
             json,
         } => story::validate(&dataset, &params, &plots, json).map(|_| ()),
+        Command::Simulate {
+            scenario,
+            out,
+            json,
+        } => simulate::simulate(scenario.as_deref(), &out, json).map(|_| ()),
         Command::Study {
             out,
             json,

@@ -1,0 +1,262 @@
+//! `crane simulate`: a scenario file (TOML) to a CSV run and a plot.
+//!
+//! Scenario format (every field optional; the built-in default is the validation multisine of
+//! `shared/MODEL.md` on the default crane with a 0.064 kg payload):
+//!
+//! ```toml
+//! duration_s = 20.0          # simulated time [s]
+//! h = 0.001                  # model step [s]
+//! sample_s = 0.002           # CSV sampling [s] (a multiple of h)
+//! payload_kg = 0.064         # overrides the parameter file's payload
+//! params = "params.toml"     # parameter file (as written by `crane identify`), relative to
+//!                            # the scenario file; default: the built-in parameters
+//! q0 = [0.25, 0.3, 0.35, 1.5707963267948966, 0.0]   # x, y, L [m], alpha, beta [rad]
+//! qd0 = [0.0, 0.0, 0.0, 0.0, 0.0]
+//! [[input]]                  # inputs are sums of these terms, per axis
+//! axis = "x"                 # x, y or l
+//! offset_v = 0.0             # constant part [V] (a step when start_s > 0)
+//! amplitude_v = 2.0          # sine amplitude [V]
+//! frequency_hz = 0.135
+//! phase_rad = 0.0
+//! start_s = 0.0              # the term acts on [start_s, stop_s)
+//! stop_s = 1e9
+//! ```
+//!
+//! The CSV is a crane run of the data format (`t,u_x,u_y,u_l,x,y,l,alpha,beta`) plus the
+//! columns `mode_x, mode_y, mode_l` (-1, 0, 1), `friction_x, friction_y, friction_l` [N] and
+//! `tension` [N] (friction and tension of the sample are those of the input of the step before
+//! it); it loads back with `crane_ident::data`.
+
+use anyhow::{bail, Context, Result};
+use crane_ident::params_file::ParamsFile;
+use crane_model::{Config, Crane, FrictionLaw, Mode, Params, State};
+use serde::Deserialize;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// One input term.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Term {
+    axis: String,
+    #[serde(default)]
+    offset_v: f64,
+    #[serde(default)]
+    amplitude_v: f64,
+    #[serde(default)]
+    frequency_hz: f64,
+    #[serde(default)]
+    phase_rad: f64,
+    #[serde(default)]
+    start_s: f64,
+    #[serde(default = "far")]
+    stop_s: f64,
+}
+
+fn far() -> f64 {
+    1e9
+}
+
+/// A scenario.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct Scenario {
+    duration_s: f64,
+    h: f64,
+    sample_s: f64,
+    payload_kg: Option<f64>,
+    params: Option<PathBuf>,
+    q0: [f64; 5],
+    qd0: [f64; 5],
+    input: Vec<Term>,
+}
+
+impl Default for Scenario {
+    /// The validation multisine of MODEL.md (amplitudes chosen to move every axis).
+    fn default() -> Self {
+        let sines = |axis: &str, f: [f64; 4], a: f64| -> Vec<Term> {
+            f.iter()
+                .map(|&frequency_hz| Term {
+                    axis: axis.into(),
+                    offset_v: 0.0,
+                    amplitude_v: a,
+                    frequency_hz,
+                    phase_rad: 0.0,
+                    start_s: 0.0,
+                    stop_s: far(),
+                })
+                .collect()
+        };
+        let mut input = sines("x", [0.135, 0.404, 0.673, 0.942], 1.5);
+        input.extend(sines("y", [0.105, 0.314, 0.523, 0.942], 1.5));
+        input.extend(sines("l", [0.135, 0.406, 0.219, 0.744], 0.5));
+        Scenario {
+            duration_s: 20.0,
+            h: 1e-3,
+            sample_s: 2e-3,
+            payload_kg: Some(0.064),
+            params: None,
+            q0: [0.25, 0.3, 0.35, core::f64::consts::FRAC_PI_2, 0.0],
+            qd0: [0.0; 5],
+            input,
+        }
+    }
+}
+
+fn axis_index(name: &str) -> Option<usize> {
+    match name {
+        "x" => Some(0),
+        "y" => Some(1),
+        "l" => Some(2),
+        _ => None,
+    }
+}
+
+fn mode_code(m: Mode) -> i8 {
+    match m {
+        Mode::Negative => -1,
+        Mode::Stopped => 0,
+        Mode::Positive => 1,
+    }
+}
+
+/// Runs a scenario file (or the default) and writes the CSV; returns the number of samples.
+pub fn simulate(scenario: Option<&Path>, out: &Path, json: bool) -> Result<usize> {
+    let (sc, base) = match scenario {
+        Some(p) => {
+            let text =
+                std::fs::read_to_string(p).with_context(|| format!("read {}", p.display()))?;
+            let sc: Scenario =
+                toml::from_str(&text).with_context(|| format!("scenario {}", p.display()))?;
+            (sc, p.parent().map(Path::to_path_buf).unwrap_or_default())
+        }
+        None => (Scenario::default(), PathBuf::new()),
+    };
+    let mut params = match &sc.params {
+        Some(p) => {
+            let path = base.join(p);
+            Params::from(
+                &ParamsFile::read(&path)
+                    .map_err(anyhow::Error::msg)
+                    .with_context(|| format!("parameters {}", path.display()))?,
+            )
+        }
+        None => Params::default(),
+    };
+    if let Some(m) = sc.payload_kg {
+        params.payload_mass = m;
+    }
+    let mut terms = Vec::new();
+    for (k, t) in sc.input.iter().enumerate() {
+        let Some(i) = axis_index(&t.axis) else {
+            bail!(
+                "scenario: input[{k}].axis = {:?}: expected \"x\", \"y\" or \"l\"",
+                t.axis
+            );
+        };
+        for (name, v) in [
+            ("offset_v", t.offset_v),
+            ("amplitude_v", t.amplitude_v),
+            ("frequency_hz", t.frequency_hz),
+            ("phase_rad", t.phase_rad),
+            ("start_s", t.start_s),
+            ("stop_s", t.stop_s),
+        ] {
+            if !v.is_finite() {
+                bail!("scenario: input[{k}].{name} is not finite");
+            }
+        }
+        terms.push((i, t.clone()));
+    }
+    if !(sc.duration_s.is_finite() && sc.duration_s > 0.0) {
+        bail!("scenario: duration_s must be > 0 (got {})", sc.duration_s);
+    }
+    let per = (sc.sample_s / sc.h).round();
+    if !(per >= 1.0 && (per * sc.h - sc.sample_s).abs() <= 1e-9 * sc.sample_s.abs()) {
+        bail!(
+            "scenario: sample_s ({}) must be a whole multiple of h ({})",
+            sc.sample_s,
+            sc.h
+        );
+    }
+    let per = per as usize;
+    let config = Config {
+        h: sc.h,
+        law: FrictionLaw::Hybrid,
+    };
+    let mut crane: Crane = Crane::new(
+        &params,
+        config,
+        State {
+            q: sc.q0,
+            qd: sc.qd0,
+        },
+    )
+    .map_err(|e| anyhow::anyhow!("scenario: {e}"))?;
+    if let Some(dir) = out.parent() {
+        std::fs::create_dir_all(dir).with_context(|| format!("create {}", dir.display()))?;
+    }
+    let file = std::fs::File::create(out).with_context(|| format!("create {}", out.display()))?;
+    let mut w = std::io::BufWriter::new(file);
+    writeln!(w, "# crane simulate: hybrid model, h = {} s", sc.h)?;
+    writeln!(
+        w,
+        "t,u_x,u_y,u_l,x,y,l,alpha,beta,mode_x,mode_y,mode_l,friction_x,friction_y,friction_l,tension"
+    )?;
+    let steps = (sc.duration_s / sc.h).round() as usize;
+    let mut samples = 0;
+    for k in 0..=steps {
+        let t = k as f64 * sc.h;
+        let mut u = [0.0; 3];
+        for (i, term) in &terms {
+            if t >= term.start_s && t < term.stop_s {
+                let arg = 2.0 * std::f64::consts::PI * term.frequency_hz * (t - term.start_s)
+                    + term.phase_rad;
+                u[*i] += term.offset_v + term.amplitude_v * libm::sin(arg);
+            }
+        }
+        let u = u.map(|v| v.clamp(-crane_model::U_MAX, crane_model::U_MAX));
+        if k % per == 0 {
+            let s = crane.state();
+            let m = crane.modes().map(mode_code);
+            let o = crane
+                .output()
+                .map_err(|e| anyhow::anyhow!("t = {t} s: {e}"))?;
+            writeln!(
+                w,
+                "{t},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                u[0],
+                u[1],
+                u[2],
+                s.q[0],
+                s.q[1],
+                s.q[2],
+                s.q[3],
+                s.q[4],
+                m[0],
+                m[1],
+                m[2],
+                o.friction[0],
+                o.friction[1],
+                o.friction[2],
+                o.tension
+            )?;
+            samples += 1;
+        }
+        if k < steps {
+            crane
+                .step(u)
+                .map_err(|e| anyhow::anyhow!("t = {t} s: {e}"))?;
+        }
+    }
+    w.flush()?;
+    if json {
+        println!(
+            "{{\"csv\": {:?}, \"samples\": {samples}}}",
+            out.display().to_string()
+        );
+    } else {
+        println!("simulate: {samples} samples -> {}", out.display());
+    }
+    Ok(samples)
+}
