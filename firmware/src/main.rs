@@ -17,7 +17,7 @@
 use core::fmt::Write;
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hio};
-use crane_model::{dynamics, Config, Crane, Law, Mode, Params, Real, State};
+use crane_model::{dynamics, Config, Crane, Law, Mode, Params, Real};
 use crane_twin::board::SimBus;
 use crane_twin::logic::control::{Controller, LoopConfig, DEMO};
 use crane_twin::logic::fastmath::F32x;
@@ -123,19 +123,7 @@ fn closed_loop<R: Real>(tag: &str, out: &mut Out) -> bool {
 
 /// Cost of `Crane::<R>::step` over a scenario, one interval per step.
 fn bench_model<R: Real>(tag: &str, sc: &Scenario, out: &mut Out) -> bool {
-    let params = Params {
-        payload_mass: sc.payload,
-        ..Params::default()
-    };
-    let config = Config {
-        h: sc.h,
-        ..Config::default()
-    };
-    let init = State {
-        q: sc.q0,
-        qd: sc.qd0,
-    };
-    let Ok(mut crane) = Crane::<R>::new(&params, config, init) else {
+    let Ok(mut crane) = sc.crane::<R>() else {
         return false;
     };
     let _ = writeln!(out, "BENCH model_step_{tag}_{} {}", sc.name, sc.steps);

@@ -3,7 +3,7 @@
 //! loop (twin estimate against the f64 twin's). Prints the table quoted in firmware/README.md
 //! (`cargo test -p crane-twin --test precision -- --nocapture`).
 
-use crane_model::{Config, Crane, Params, Real, State};
+use crane_model::Real;
 use crane_twin::logic::fastmath::F32x;
 use crane_twin::logic::plant::{demo_plant, run_demo};
 use crane_twin::logic::scenarios::{InputGen, Scenario, SCENARIOS};
@@ -11,20 +11,8 @@ use crane_twin::logic::scenarios::{InputGen, Scenario, SCENARIOS};
 /// Largest |x_R - x_f64| of the drive positions [m] and swing angles [rad] over the first
 /// `steps` steps of `sc` (same inputs, rounded to R).
 fn open_loop_dev<R: Real>(sc: &Scenario, steps: u32) -> (f64, f64) {
-    let params = Params {
-        payload_mass: sc.payload,
-        ..Params::default()
-    };
-    let config = Config {
-        h: sc.h,
-        ..Config::default()
-    };
-    let init = State {
-        q: sc.q0,
-        qd: sc.qd0,
-    };
-    let mut a = Crane::<f64>::new(&params, config, init).unwrap();
-    let mut b = Crane::<R>::new(&params, config, init).unwrap();
+    let mut a = sc.crane::<f64>().unwrap();
+    let mut b = sc.crane::<R>().unwrap();
     let mut gen = InputGen::new(sc);
     let (mut dp, mut da) = (0.0f64, 0.0f64);
     for k in 0..steps {

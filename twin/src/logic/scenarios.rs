@@ -47,6 +47,29 @@ pub struct Scenario {
     pub input: Input,
 }
 
+impl Scenario {
+    /// The model of this scenario: default parameters with its payload, its step, its
+    /// initial state.
+    pub fn crane<R: Real>(&self) -> Result<Crane<R>, crane_model::Error> {
+        let params = Params {
+            payload_mass: self.payload,
+            ..Params::default()
+        };
+        let config = Config {
+            h: self.h,
+            ..Config::default()
+        };
+        Crane::<R>::new(
+            &params,
+            config,
+            State {
+                q: self.q0,
+                qd: self.qd0,
+            },
+        )
+    }
+}
+
 /// The scenarios, in the order the firmware prints them.
 pub const SCENARIOS: [Scenario; 5] = [
     Scenario {
@@ -250,19 +273,7 @@ pub fn run<R: Real, W: Write>(
         (sc.h * 1e6 + 0.5) as u32,
         sc.steps
     )?;
-    let params = Params {
-        payload_mass: sc.payload,
-        ..Params::default()
-    };
-    let config = Config {
-        h: sc.h,
-        ..Config::default()
-    };
-    let init = State {
-        q: sc.q0,
-        qd: sc.qd0,
-    };
-    let mut crane = match Crane::<R>::new(&params, config, init) {
+    let mut crane = match sc.crane::<R>() {
         Ok(c) => c,
         Err(e) => {
             writeln!(out, "ERROR {} {}", sc.name, e)?;
