@@ -65,16 +65,8 @@ pub fn bump_shape(q: f64, center: f64, width: f64) -> f64 {
     }
 }
 
-/// Input dead band: `|u| <= d` gives 0, else `u - sign(u) d`.
-pub fn deadband(u: f64, d: f64) -> f64 {
-    if u > d {
-        u - d
-    } else if u < -d {
-        u + d
-    } else {
-        0.0
-    }
-}
+/// Input dead band, the model's own (`u - sign(u) d` outside `|u| <= d`).
+pub use crane_model::extensions::deadband;
 
 /// `u` delayed by `m` half-samples (model steps of half the sampling period), averaged over
 /// each sample as a two-substep zero-order hold sees it; zero before the start.

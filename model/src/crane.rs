@@ -1,7 +1,7 @@
 //! The simulator object: validated parameters, state, modes, fixed step.
 
 use crate::dynamics::{eval, Coeffs, Law};
-use crate::extensions::{DelayLine, Extensions};
+use crate::extensions::{deadband, DelayLine, Extensions};
 use crate::integrator::{step_hybrid, step_smooth, StepReport};
 use crate::modes::Mode;
 use crate::params::{check, Error, Params, Problem};
@@ -281,13 +281,7 @@ impl<R: Real> Crane<R> {
         }
         for (v, ax) in uc.iter_mut().zip(self.coeffs.axes.iter()) {
             if let Some(d) = ax.deadzone {
-                *v = if *v > d {
-                    *v - d
-                } else if *v < -d {
-                    *v + d
-                } else {
-                    R::ZERO
-                };
+                *v = deadband(*v, d);
             }
         }
         let (state, modes, report) = match self.law {

@@ -7,6 +7,7 @@
 //! so the baseline's bits are unchanged.
 
 use crate::params::{check, Error, Problem};
+use crate::real::Real;
 
 /// Maximum number of localised friction bumps over all axes.
 pub const MAX_BUMPS: usize = 4;
@@ -146,6 +147,18 @@ impl Extensions {
             *n = k as usize;
         }
         Ok(steps)
+    }
+}
+
+/// Input dead band [V]: `|u| <= d` gives 0, else `u - sign(u) d` (the amplifier's dead zone).
+#[inline]
+pub fn deadband<R: Real>(u: R, d: R) -> R {
+    if u > d {
+        u - d
+    } else if u < -d {
+        u + d
+    } else {
+        R::ZERO
     }
 }
 
