@@ -123,7 +123,7 @@ pub struct DryFit {
     pub forces: Vec<f64>,
     /// Noise variance assumed [N^2].
     pub noise_var: f64,
-    /// Curve with 95 % band.
+    /// Curve with its pointwise and simultaneous 95 % bands.
     pub curve: FrictionCurve,
 }
 

@@ -23,21 +23,32 @@ fn rel(x: f64, t: f64) -> f64 {
     ((x - t) / t).abs()
 }
 
-/// RMS error against the truth over the axis and the fraction of the axis where the truth
-/// lies inside the 95 % band.
-fn curve_quality(fit: &DryFit, truth: &[f64; 5]) -> (f64, f64) {
+/// How one fitted curve compares with the truth over the axis.
+struct CurveQuality {
+    /// RMS error [N].
+    rms: f64,
+    /// Fraction of the axis where the truth lies inside the pointwise 95 % band.
+    pointwise: f64,
+    /// Fraction of the axis where the truth lies inside the simultaneous 95 % band.
+    simultaneous: f64,
+}
+
+fn curve_quality(fit: &DryFit, truth: &[f64; 5]) -> CurveQuality {
     let c = &fit.curve;
     let n = c.position.len();
     let mut se = 0.0;
-    let mut inside = 0;
+    let mut inside = [0usize; 2];
     for k in 0..n {
         let t = horner(truth, c.position[k]);
         se += (c.mean[k] - t).powi(2);
-        if t >= c.lower[k] && t <= c.upper[k] {
-            inside += 1;
-        }
+        inside[0] += (t >= c.lower[k] && t <= c.upper[k]) as usize;
+        inside[1] += (t >= c.simultaneous_lower[k] && t <= c.simultaneous_upper[k]) as usize;
     }
-    ((se / n as f64).sqrt(), inside as f64 / n as f64)
+    CurveQuality {
+        rms: (se / n as f64).sqrt(),
+        pointwise: inside[0] as f64 / n as f64,
+        simultaneous: inside[1] as f64 / n as f64,
+    }
 }
 
 fn temp_dir(tag: &str) -> std::path::PathBuf {
@@ -203,17 +214,22 @@ fn identification_from_the_virtual_rig_meets_the_issue_numbers() {
         assert!(rel(d.viscous_pos.value, t.viscous_pos) < 0.05, "{name} D+");
         assert!(rel(d.viscous_neg.value, t.viscous_neg) < 0.05, "{name} D-");
         for (dir, f, tc) in [("+", &d.dry_pos, &t.dry_pos), ("-", &d.dry_neg, &t.dry_neg)] {
-            let (rms, inside) = curve_quality(f, tc);
+            let q = curve_quality(f, tc);
             eprintln!(
-                "  {name}{dir}: {} probes, RMS {rms:.4} N, truth inside band {:.0} %",
+                "  {name}{dir}: {} probes, RMS {:.4} N, truth inside the 95 % band over {:.0} % of the axis (pointwise band: {:.0} %), multiplier {:.2}",
                 f.positions.len(),
-                100.0 * inside
+                q.rms,
+                100.0 * q.simultaneous,
+                100.0 * q.pointwise,
+                f.curve.simultaneous_multiplier
             );
             assert!(f.positions.len() <= 15);
-            assert!(rms < 0.1, "{name}{dir} RMS {rms}");
-            // per curve the 95 % band holds the truth over >= 90 % of the axis only in about
-            // 80 % of the realisations (see the many-seed test); assert a looser bound here
-            assert!(inside >= 0.5, "{name}{dir} inside {inside}");
+            assert!(q.rms < 0.1, "{name}{dir} RMS {}", q.rms);
+            assert!(
+                q.simultaneous >= 0.9,
+                "{name}{dir} inside {}",
+                q.simultaneous
+            );
         }
         // standard errors and correlation matrices are reported
         assert!(d.fit_viscous.std_err.iter().all(|s| *s > 0.0));
@@ -257,9 +273,23 @@ fn paper_processing_without_parallel_filtering_biases_the_inertia() {
     assert!(rel(r.inertia.value, truth.rope.inertia) > 0.02);
 }
 
-/// Probes a synthetic truth with Gaussian noise (the acquisition does not depend on the
-/// measured values, so this is the design question alone).
-fn max_std_after(active: bool, seed: u64, var: f64, truth: &[f64; 5], range: f64) -> f64 {
+/// One friction curve: name, axis, direction (`true`: positive), the paper's breakaway noise
+/// variance [N^2], axis length [m], true coefficients.
+type CurveCase = (&'static str, usize, bool, f64, f64, [f64; 5]);
+
+/// The four friction curves.
+fn curves(truth: &Params) -> [CurveCase; 4] {
+    [
+        ("X+", 0, true, 0.026, 0.505, truth.x.dry_pos),
+        ("X-", 0, false, 0.0073, 0.505, truth.x.dry_neg),
+        ("Y+", 1, true, 0.003, 0.625, truth.y.dry_pos),
+        ("Y-", 1, false, 0.0056, 0.625, truth.y.dry_neg),
+    ]
+}
+
+/// Probes a synthetic truth with Gaussian noise of variance `var` (exact model, known
+/// noise): by active learning or on a uniform grid of the same size.
+fn synthetic_fit(active: bool, seed: u64, var: f64, truth: &[f64; 5], range: f64) -> Blr {
     let opt = BlrOptions::default();
     let mut rng = Rng::new(seed);
     let mut noise = Rng::new(seed ^ 0xABCD);
@@ -276,44 +306,91 @@ fn max_std_after(active: bool, seed: u64, var: f64, truth: &[f64; 5], range: f64
         }
     }
     assert_eq!(blr.xs.len(), opt.budget);
-    blr.max_std(&linspace(0.0, range, 201))
+    blr
 }
 
 #[test]
 fn active_learning_beats_a_uniform_grid_of_the_same_size() {
+    // The acquisition does not depend on the measured values, so this is the design
+    // question alone; the uniform grid is the same design on every seed.
     let truth = Params::default();
-    let mut wins = 0;
-    let mut sum = [0.0, 0.0];
     let seeds = 100;
-    let uniform = max_std_after(false, 0, 0.026, &truth.x.dry_pos, 0.505);
-    for seed in 0..seeds {
-        let al = max_std_after(true, seed, 0.026, &truth.x.dry_pos, 0.505);
-        sum[0] += al;
-        sum[1] += uniform;
-        if al < uniform {
-            wins += 1;
+    for (name, _, _, var, range, tc) in curves(&truth) {
+        let grid = linspace(0.0, range, 201);
+        let uniform = synthetic_fit(false, 0, var, &tc, range).max_std(&grid);
+        let mut wins = 0;
+        let mut sum = 0.0;
+        for seed in 0..seeds {
+            let al = synthetic_fit(true, seed, var, &tc, range).max_std(&grid);
+            sum += al;
+            wins += (al < uniform) as usize;
         }
+        let mean = sum / seeds as f64;
+        eprintln!(
+            "{name} ({var} N^2), 15 probes: max predictive std active {mean:.4} N (mean of {seeds} seeds) vs uniform grid {uniform:.4} N; active lower in {wins}/{seeds}"
+        );
+        assert!(mean < uniform, "{name}");
+        // not on every seed: the random first probe sometimes leads to a worse design
+        assert!(wins as f64 >= 0.7 * seeds as f64, "{name}: {wins}");
     }
-    eprintln!(
-        "X+ (0.026 N^2), 15 probes: max predictive std active {:.4} N (mean of {seeds} seeds) vs uniform grid {:.4} N; active lower in {wins}/{seeds}",
-        sum[0] / seeds as f64,
-        sum[1] / seeds as f64
-    );
-    assert!(sum[0] < sum[1]);
-    // not on every seed: the random first probe sometimes leads to a worse design
-    assert!(wins as f64 >= 0.7 * seeds as f64, "{wins}");
 }
 
 #[test]
-fn friction_bands_are_calibrated_over_many_seeds() {
-    // Several campaigns' breakaway stage (active learning against the virtual rig, the
-    // paper's scatter): RMS error and band coverage per curve, and the pooled coverage.
+fn pointwise_bands_miss_the_range_criterion_and_simultaneous_bands_meet_it() {
+    // The cause of "truth inside the 95 % band over >= 90 % of the axis" failing on some
+    // curves: with an exact model and the exact noise variance (no bias anywhere) the
+    // pointwise band is calibrated (mean coverage 95 %) yet holds the truth over >= 90 % of
+    // the axis in only ~83 % of realisations, because the errors of a 5-coefficient fit are
+    // correlated along the axis. The simultaneous band is calibrated for the whole axis.
     let truth = Params::default();
-    let mut curves = 0;
-    let mut rms_ok = 0;
-    let mut band_ok = 0;
-    let mut inside_sum = 0.0;
-    for seed in 0..6u64 {
+    let seeds = 250u64;
+    let (mut n, mut pw_mean, mut pw_ok, mut sim_ok, mut sim_whole) = (0, 0.0, 0, 0, 0);
+    for (ci, (name, _, _, var, range, tc)) in curves(&truth).into_iter().enumerate() {
+        let mut ok = [0usize; 2];
+        for seed in 0..seeds {
+            // independent realisations per curve
+            let blr = synthetic_fit(true, 1000 * (ci as u64 + 1) + seed, var, &tc, range);
+            let fit = crane_ident::identify::dry_fit_from(&blr, var, 101);
+            let q = curve_quality(&fit, &tc);
+            n += 1;
+            pw_mean += q.pointwise;
+            ok[0] += (q.pointwise >= 0.9) as usize;
+            ok[1] += (q.simultaneous >= 0.9) as usize;
+            sim_whole += (q.simultaneous == 1.0) as usize;
+        }
+        eprintln!(
+            "{name}: truth inside over >= 90 % of the axis in {}/{seeds} realisations with the pointwise band, {}/{seeds} with the simultaneous band",
+            ok[0], ok[1]
+        );
+        pw_ok += ok[0];
+        sim_ok += ok[1];
+    }
+    let f = |k: usize| k as f64 / n as f64;
+    eprintln!(
+        "{n} realisations: pointwise mean coverage {:.1} %, pointwise >= 90 % of the axis in {:.1} %; simultaneous >= 90 % in {:.1} %, whole axis in {:.1} %",
+        100.0 * pw_mean / n as f64,
+        100.0 * f(pw_ok),
+        100.0 * f(sim_ok),
+        100.0 * f(sim_whole)
+    );
+    // pointwise: calibrated on average, but short of the range criterion
+    assert!((pw_mean / n as f64 - 0.95).abs() < 0.015);
+    assert!(f(pw_ok) < 0.9);
+    // simultaneous: meets it, and holds the whole curve about 95 % of the time (the tube
+    // formula is slightly conservative), so it is not wider than its meaning asks
+    assert!(f(sim_ok) >= 0.95);
+    assert!(f(sim_whole) >= 0.93 && f(sim_whole) <= 0.99);
+}
+
+#[test]
+fn friction_curves_over_several_seeds_on_the_virtual_rig() {
+    // The breakaway stage of several campaigns (active learning against the virtual rig,
+    // the paper's scatter, onsets corrected for the detection lag): all four curves per seed.
+    let truth = Params::default();
+    let seeds = 8u64;
+    let (mut n, mut rms_ok, mut sim_ok, mut pw_sum) = (0, 0, 0, 0.0);
+    let mut seeds_all_four = 0;
+    for seed in 0..seeds {
         let mut rig = VirtualRig::new(
             truth,
             PlantConfig {
@@ -323,44 +400,89 @@ fn friction_bands_are_calibrated_over_many_seeds() {
         );
         let mut rng = Rng::new(seed);
         let opt = IdentOptions::default();
-        for (axis, ax, range) in [(0usize, &truth.x, 0.505), (1, &truth.y, 0.625)] {
-            for pos in [true, false] {
-                let var = match (axis, pos) {
-                    (0, true) => 0.026,
-                    (0, false) => 0.0073,
-                    (1, true) => 0.003,
-                    _ => 0.0056,
-                };
-                let mut blr = Blr::new(0.0, range, 4, opt.blr.prior_std, var);
-                let (k, d) = (ax.gain, if pos { ax.viscous_pos } else { ax.viscous_neg });
-                let m =
-                    ax.inertia + truth.trolley_mass + if axis == 0 { truth.rail_mass } else { 0.0 };
-                let res = rig.resolution(axis);
-                active_learning(
-                    &mut blr,
-                    &opt.blr,
-                    &mut rng,
-                    |p| -> Result<(f64, f64), ()> {
-                        let r = rig.breakaway(&Probe::new(axis, pos, p)).unwrap();
-                        let on = corrected_onset(&r.run, axis, res, d / k, m / d).unwrap();
-                        Ok((k * on.volts.abs(), on.position))
-                    },
-                )
-                .unwrap();
-                let fit = crane_ident::identify::dry_fit_from(&blr, var, 101);
-                let (rms, inside) =
-                    curve_quality(&fit, if pos { &ax.dry_pos } else { &ax.dry_neg });
-                curves += 1;
-                rms_ok += (rms < 0.1) as usize;
-                band_ok += (inside >= 0.9) as usize;
-                inside_sum += inside;
-            }
+        let mut line = format!("seed {seed}:");
+        let mut all_four = true;
+        for (name, axis, pos, var, range, tc) in curves(&truth) {
+            let ax = if axis == 0 { &truth.x } else { &truth.y };
+            let mut blr = Blr::new(0.0, range, 4, opt.blr.prior_std, var);
+            let (k, d) = (ax.gain, if pos { ax.viscous_pos } else { ax.viscous_neg });
+            let m = ax.inertia + truth.trolley_mass + if axis == 0 { truth.rail_mass } else { 0.0 };
+            let res = rig.resolution(axis);
+            active_learning(
+                &mut blr,
+                &opt.blr,
+                &mut rng,
+                |p| -> Result<(f64, f64), ()> {
+                    let r = rig.breakaway(&Probe::new(axis, pos, p)).unwrap();
+                    let on = corrected_onset(&r.run, axis, res, d / k, m / d).unwrap();
+                    Ok((k * on.volts.abs(), on.position))
+                },
+            )
+            .unwrap();
+            assert!(blr.xs.len() <= 15);
+            let fit = crane_ident::identify::dry_fit_from(&blr, var, 101);
+            let q = curve_quality(&fit, &tc);
+            line += &format!(
+                " {name} RMS {:.3} N, inside {:.0} % (pointwise {:.0} %);",
+                q.rms,
+                100.0 * q.simultaneous,
+                100.0 * q.pointwise
+            );
+            n += 1;
+            rms_ok += (q.rms < 0.1) as usize;
+            sim_ok += (q.simultaneous >= 0.9) as usize;
+            all_four &= q.simultaneous >= 0.9;
+            pw_sum += q.pointwise;
         }
+        seeds_all_four += all_four as usize;
+        eprintln!("{line}");
     }
-    let pooled = inside_sum / curves as f64;
-    eprintln!("{curves} curves: RMS < 0.1 N in {rms_ok}, truth inside the band over >= 90 % of the axis in {band_ok}, pooled coverage {:.1} %", 100.0 * pooled);
-    assert!(rms_ok as f64 >= 0.85 * curves as f64);
-    // a calibrated 95 % band: pooled coverage near 95 %
-    assert!(pooled > 0.88 && pooled < 0.995, "{pooled}");
-    assert!(band_ok as f64 >= 0.6 * curves as f64);
+    eprintln!(
+        "{n} curves: RMS < 0.1 N in {rms_ok}, truth inside the 95 % band over >= 90 % of the axis in {sim_ok}, all four curves in {seeds_all_four}/{seeds} seeds; pointwise mean coverage {:.1} %",
+        100.0 * pw_sum / n as f64
+    );
+    // per curve the simultaneous band meets the criterion with probability ~0.985 (previous
+    // test); allow one miss in 32
+    assert!(sim_ok + 1 >= n, "{sim_ok}/{n}");
+    // X+ (sigma 0.16 N, 15 probes) is within 0.1 N RMS in ~83 % of realisations; the
+    // others always
+    assert!(rms_ok as f64 >= 0.9 * n as f64, "{rms_ok}/{n}");
+    // the pointwise band stays calibrated on the rig data too
+    assert!((pw_sum / n as f64 - 0.95).abs() < 0.04);
+}
+
+#[test]
+fn lag_corrected_breakaway_probes_are_unbiased() {
+    // Not a cause of band misses: without probe scatter, the lag-corrected breakaway force
+    // equals the true friction to well under a millinewton at every position (the raw
+    // onset, seen one encoder count late, reads ~0.02 N high).
+    let truth = Params::default();
+    let cfg = PlantConfig {
+        breakaway_noise: None,
+        ..PlantConfig::default()
+    };
+    let mut rig = VirtualRig::new(truth, cfg);
+    for (name, axis, pos, _, range, tc) in curves(&truth) {
+        let ax = if axis == 0 { &truth.x } else { &truth.y };
+        let (k, d) = (ax.gain, if pos { ax.viscous_pos } else { ax.viscous_neg });
+        let m = ax.inertia + truth.trolley_mass + if axis == 0 { truth.rail_mass } else { 0.0 };
+        let res = rig.resolution(axis);
+        let n = 30;
+        let (mut worst, mut bias, mut raw_bias) = (0.0f64, 0.0, 0.0);
+        for i in 0..n {
+            let p = 0.005 + (range - 0.01) * (i as f64 + 0.37) / n as f64;
+            let r = rig.breakaway(&Probe::new(axis, pos, p)).unwrap();
+            let on = corrected_onset(&r.run, axis, res, d / k, m / d).unwrap();
+            let t = horner(&tc, on.position);
+            let e = k * on.volts.abs() - t;
+            worst = worst.max(e.abs());
+            bias += e / n as f64;
+            raw_bias += (k * r.onset.unwrap().volts.abs() - t) / n as f64;
+        }
+        eprintln!(
+            "{name}: lag-corrected probe error mean {bias:.5} N, largest {worst:.5} N; raw onset mean error {raw_bias:.4} N"
+        );
+        assert!(worst < 1e-3, "{name}: {worst}");
+        assert!(raw_bias > 0.01, "{name}: {raw_bias}");
+    }
 }
