@@ -51,6 +51,9 @@ enum Command {
         /// Parameter file to write.
         #[arg(long, default_value = "out/params.toml")]
         out: PathBuf,
+        /// Directory for the friction plots with their 95 % bands (SVG).
+        #[arg(long, default_value = "out/plots")]
+        plots: PathBuf,
         /// Print machine-readable results (JSON).
         #[arg(long)]
         json: bool,
@@ -142,9 +145,12 @@ fn main() {
     let result = match cli.command {
         Command::Demo { out, json } => story::demo(&out, json),
         Command::Rig { out, seed, json } => story::rig(&out, seed, json).map(|_| ()),
-        Command::Identify { dataset, out, json } => {
-            story::identify(&dataset, &out, json).map(|_| ())
-        }
+        Command::Identify {
+            dataset,
+            out,
+            plots,
+            json,
+        } => story::identify(&dataset, &out, &plots, json).map(|_| ()),
         Command::Validate {
             dataset,
             params,

@@ -1,8 +1,11 @@
-//! Figures (SVG, plotters): measured against simulated payload position.
+//! Figures (SVG, plotters): measured against simulated payload position (validation), the
+//! identified friction curves with their bands, and `crane simulate` runs.
 
 use anyhow::{Context, Result};
 use crane_ident::data::{CraneRun, Dataset};
+use crane_ident::identify::{DryFit, Identified};
 use crane_ident::validate::ValidationReport;
+use crane_model::Mode;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -90,6 +93,315 @@ fn draw(
             .label("simulated")
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED));
         chart.configure_series_labels().border_style(BLACK).draw()?;
+    }
+    root.present()?;
+    Ok(())
+}
+
+type Dyn = Box<dyn std::error::Error>;
+
+/// Lowest and highest of `vals`, padded by 5 % (at least `min_pad`).
+fn padded(vals: impl Iterator<Item = f64>, min_pad: f64) -> (f64, f64) {
+    let (lo, hi) = vals
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+            (l.min(v), h.max(v))
+        });
+    if !lo.is_finite() {
+        return (-1.0, 1.0);
+    }
+    let pad = ((hi - lo) * 0.05).max(min_pad);
+    (lo - pad, hi + pad)
+}
+
+/// `sum c_k p^k`, clamped at zero like the model's `Cbar(p)`.
+fn horner(c: &[f64], p: f64) -> f64 {
+    c.iter().rev().fold(0.0, |a, ci| a * p + ci).max(0.0)
+}
+
+/// One SVG per drive axis (`friction_x.svg`, `friction_y.svg`), a panel per direction: the
+/// identified dry-friction curve `Cbar(p)` [N] over the position [m], its simultaneous 95 %
+/// band (shaded), its pointwise 95 % band (thin lines), the breakaway probes, and the true
+/// curve when `truth` is known (virtual rig).
+pub fn friction(
+    id: &Identified,
+    truth: Option<&crane_model::Params>,
+    dir: &Path,
+) -> Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir).with_context(|| format!("create {}", dir.display()))?;
+    let mut files = Vec::new();
+    for (name, d, t) in [
+        ("x", &id.x, truth.map(|t| &t.x)),
+        ("y", &id.y, truth.map(|t| &t.y)),
+    ] {
+        let path = dir.join(format!("friction_{name}.svg"));
+        let truths = t.map(|t| [t.dry_pos, t.dry_neg]);
+        draw_friction(&path, name, [&d.dry_pos, &d.dry_neg], truths)
+            .map_err(|e| anyhow::anyhow!("{e}"))
+            .with_context(|| format!("plot {}", path.display()))?;
+        files.push(path);
+    }
+    Ok(files)
+}
+
+fn draw_friction(
+    path: &Path,
+    axis: &str,
+    fits: [&DryFit; 2],
+    truth: Option<[[f64; 5]; 2]>,
+) -> std::result::Result<(), Dyn> {
+    let root = SVGBackend::new(path, (900, 800)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let panels = root.split_evenly((2, 1));
+    for (i, (area, fit)) in panels.iter().zip(fits).enumerate() {
+        let c = &fit.curve;
+        let dir = ["+", "-"][i];
+        let colour = [BLUE, RED][i];
+        let truth_c = truth.map(|t| t[i]);
+        let truth_pts: Vec<(f64, f64)> = truth_c
+            .map(|tc| c.position.iter().map(|&p| (p, horner(&tc, p))).collect())
+            .unwrap_or_default();
+        let (lo, hi) = padded(
+            c.simultaneous_lower
+                .iter()
+                .chain(&c.simultaneous_upper)
+                .chain(&fit.forces)
+                .copied()
+                .chain(truth_pts.iter().map(|p| p.1)),
+            0.01,
+        );
+        let (x0, x1) = (
+            c.position.first().copied().unwrap_or(0.0),
+            c.position.last().copied().unwrap_or(1.0),
+        );
+        let mut chart = ChartBuilder::on(area)
+            .caption(
+                format!(
+                    "{} dry friction Cbar{dir}(p): {} probes, simultaneous band mean ± {:.2} std",
+                    axis.to_uppercase(),
+                    fit.positions.len(),
+                    c.simultaneous_multiplier
+                ),
+                ("sans-serif", 18),
+            )
+            .margin(8)
+            .x_label_area_size(35)
+            .y_label_area_size(60)
+            .build_cartesian_2d(x0..x1, lo..hi)?;
+        chart
+            .configure_mesh()
+            .light_line_style(TRANSPARENT)
+            .x_desc(format!("{axis} [m]"))
+            .y_desc(format!("Cbar{dir} [N]"))
+            .draw()?;
+        let band: Vec<(f64, f64)> = c
+            .position
+            .iter()
+            .zip(&c.simultaneous_upper)
+            .map(|(&p, &v)| (p, v))
+            .chain(
+                c.position
+                    .iter()
+                    .zip(&c.simultaneous_lower)
+                    .rev()
+                    .map(|(&p, &v)| (p, v)),
+            )
+            .collect();
+        chart
+            .draw_series(std::iter::once(Polygon::new(
+                band,
+                colour.mix(0.18).filled(),
+            )))?
+            .label("95 % band over the axis (simultaneous)")
+            .legend(move |(x, y)| {
+                Rectangle::new([(x, y - 5), (x + 20, y + 5)], colour.mix(0.18).filled())
+            });
+        for (k, edge) in [&c.lower, &c.upper].into_iter().enumerate() {
+            let s = chart.draw_series(LineSeries::new(
+                c.position.iter().zip(edge).map(|(&p, &v)| (p, v)),
+                colour.mix(0.6).stroke_width(1),
+            ))?;
+            if k == 0 {
+                s.label("pointwise 95 % band").legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], colour.mix(0.6))
+                });
+            }
+        }
+        chart
+            .draw_series(LineSeries::new(
+                c.position.iter().zip(&c.mean).map(|(&p, &v)| (p, v)),
+                colour.stroke_width(2),
+            ))?
+            .label("estimate (posterior mean)")
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
+        chart
+            .draw_series(
+                fit.positions
+                    .iter()
+                    .zip(&fit.forces)
+                    .map(|(&p, &f)| Circle::new((p, f), 3, BLACK.filled())),
+            )?
+            .label("breakaway probes")
+            .legend(|(x, y)| Circle::new((x + 10, y), 3, BLACK.filled()));
+        if !truth_pts.is_empty() {
+            chart
+                .draw_series(DashedLineSeries::new(
+                    truth_pts,
+                    6,
+                    4,
+                    BLACK.stroke_width(1),
+                ))?
+                .label("truth (virtual rig)")
+                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()?;
+    }
+    root.present()?;
+    Ok(())
+}
+
+/// What `crane simulate` recorded, one entry per CSV sample.
+#[derive(Clone, Debug, Default)]
+pub struct SimulationRecord {
+    /// Time [s].
+    pub t: Vec<f64>,
+    /// Voltages `u_x, u_y, u_l` [V].
+    pub u: Vec<[f64; 3]>,
+    /// Drive positions `x, y, L` [m].
+    pub q: Vec<[f64; 3]>,
+    /// Drive velocities `xd, yd, Ld` [m/s].
+    pub qd: Vec<[f64; 3]>,
+    /// Modes of X, Y and the rope.
+    pub modes: Vec<[Mode; 3]>,
+}
+
+/// Fill colour of a mode band (red: negative, yellow: stopped, green: positive).
+fn mode_colour(m: Mode) -> RGBColor {
+    match m {
+        Mode::Negative => RGBColor(240, 150, 150),
+        Mode::Stopped => RGBColor(250, 225, 120),
+        Mode::Positive => RGBColor(150, 215, 150),
+    }
+}
+
+/// Maximal runs of equal mode of drive `i`: `(t_start, t_end, mode)`; a run ends where the
+/// next begins.
+fn mode_runs(rec: &SimulationRecord, i: usize) -> Vec<(f64, f64, Mode)> {
+    let mut out: Vec<(f64, f64, Mode)> = Vec::new();
+    for (k, m) in rec.modes.iter().enumerate() {
+        let t = rec.t[k];
+        match out.last_mut() {
+            Some(last) if last.2 == m[i] => last.1 = t,
+            Some(last) => {
+                last.1 = t;
+                out.push((t, t, m[i]));
+            }
+            None => out.push((t, t, m[i])),
+        }
+    }
+    out
+}
+
+/// The run of `crane simulate` as one SVG: drive positions, velocities and voltages of X, Y
+/// and the rope against time, and a panel of mode bands (Negative / Stopped / Positive per
+/// drive).
+pub fn simulation(rec: &SimulationRecord, path: &Path) -> Result<()> {
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir).with_context(|| format!("create {}", dir.display()))?;
+    }
+    draw_simulation(rec, path)
+        .map_err(|e| anyhow::anyhow!("{e}"))
+        .with_context(|| format!("plot {}", path.display()))
+}
+
+fn draw_simulation(rec: &SimulationRecord, path: &Path) -> std::result::Result<(), Dyn> {
+    let root = SVGBackend::new(path, (1000, 1100)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let (top, bottom) = root.split_vertically(900);
+    let panels = top.split_evenly((3, 1));
+    let t_end = rec.t.last().copied().unwrap_or(1.0).max(1e-9);
+    // at most ~2000 points per line
+    let stride = (rec.t.len() / 2000).max(1);
+    let names = ["x", "y", "L"];
+    let colours = [BLUE, RED, GREEN];
+    type Series<'a> = (&'a str, &'a str, Box<dyn Fn(usize, usize) -> f64 + 'a>);
+    let quantities: [Series; 3] = [
+        ("drive positions", "[m]", Box::new(|k, i| rec.q[k][i])),
+        ("drive velocities", "[m/s]", Box::new(|k, i| rec.qd[k][i])),
+        ("voltages", "[V]", Box::new(|k, i| rec.u[k][i])),
+    ];
+    for (area, (title, unit, value)) in panels.iter().zip(quantities.iter()) {
+        let (lo, hi) = padded(
+            (0..rec.t.len())
+                .flat_map(|k| (0..3).map(move |i| (k, i)))
+                .map(|(k, i)| value(k, i)),
+            1e-3,
+        );
+        let mut chart = ChartBuilder::on(area)
+            .caption(*title, ("sans-serif", 18))
+            .margin(8)
+            .x_label_area_size(30)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..t_end, lo..hi)?;
+        chart
+            .configure_mesh()
+            .light_line_style(TRANSPARENT)
+            .x_desc("t [s]")
+            .y_desc(*unit)
+            .draw()?;
+        for i in 0..3 {
+            let c = colours[i];
+            chart
+                .draw_series(LineSeries::new(
+                    (0..rec.t.len())
+                        .step_by(stride)
+                        .map(|k| (rec.t[k], value(k, i))),
+                    c.stroke_width(2),
+                ))?
+                .label(names[i])
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c));
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()?;
+    }
+    // Mode bands: one strip per drive (x top, L bottom).
+    let mut chart = ChartBuilder::on(&bottom)
+        .caption(
+            "modes (red: Negative, yellow: Stopped, green: Positive)",
+            ("sans-serif", 18),
+        )
+        .margin(8)
+        .x_label_area_size(30)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..t_end, -0.5..2.5)?;
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .y_labels(3)
+        .y_label_formatter(&|v: &f64| {
+            match v.round() as i64 {
+                2 => "x",
+                1 => "y",
+                0 => "L",
+                _ => "",
+            }
+            .to_string()
+        })
+        .x_desc("t [s]")
+        .draw()?;
+    for i in 0..3 {
+        let y = 2.0 - i as f64;
+        chart.draw_series(mode_runs(rec, i).into_iter().map(|(a, b, m)| {
+            Rectangle::new([(a, y - 0.4), (b, y + 0.4)], mode_colour(m).filled())
+        }))?;
     }
     root.present()?;
     Ok(())

@@ -1,4 +1,5 @@
-//! `crane simulate`: a scenario file (TOML) to a CSV run and a plot.
+//! `crane simulate`: a scenario file (TOML) to a CSV run and a plot (SVG beside the CSV, same
+//! name with `.svg`: drive positions, velocities, voltages and mode bands).
 //!
 //! Scenario format (every field optional; the built-in default is the validation multisine of
 //! `shared/MODEL.md` on the default crane with a 0.064 kg payload):
@@ -120,7 +121,13 @@ fn mode_code(m: Mode) -> i8 {
     }
 }
 
-/// Runs a scenario file (or the default) and writes the CSV; returns the number of samples.
+/// The plot written beside a CSV: same path with the extension `svg`.
+pub fn plot_path(csv: &Path) -> PathBuf {
+    csv.with_extension("svg")
+}
+
+/// Runs a scenario file (or the default) and writes the CSV and its plot ([`plot_path`]);
+/// returns the number of samples.
 pub fn simulate(scenario: Option<&Path>, out: &Path, json: bool) -> Result<usize> {
     let (sc, base) = match scenario {
         Some(p) => {
@@ -205,6 +212,7 @@ pub fn simulate(scenario: Option<&Path>, out: &Path, json: bool) -> Result<usize
     )?;
     let steps = (sc.duration_s / sc.h).round() as usize;
     let mut samples = 0;
+    let mut rec = crate::plot::SimulationRecord::default();
     for k in 0..=steps {
         let t = k as f64 * sc.h;
         let mut u = [0.0; 3];
@@ -242,6 +250,11 @@ pub fn simulate(scenario: Option<&Path>, out: &Path, json: bool) -> Result<usize
                 o.tension
             )?;
             samples += 1;
+            rec.t.push(t);
+            rec.u.push(u);
+            rec.q.push([s.q[0], s.q[1], s.q[2]]);
+            rec.qd.push([s.qd[0], s.qd[1], s.qd[2]]);
+            rec.modes.push(crane.modes());
         }
         if k < steps {
             crane
@@ -250,13 +263,23 @@ pub fn simulate(scenario: Option<&Path>, out: &Path, json: bool) -> Result<usize
         }
     }
     w.flush()?;
+    let svg = plot_path(out);
+    crate::plot::simulation(&rec, &svg)?;
     if json {
         println!(
-            "{{\"csv\": {:?}, \"samples\": {samples}}}",
-            out.display().to_string()
+            "{}",
+            serde_json::json!({
+                "csv": out.display().to_string(),
+                "svg": svg.display().to_string(),
+                "samples": samples,
+            })
         );
     } else {
-        println!("simulate: {samples} samples -> {}", out.display());
+        println!(
+            "simulate: {samples} samples -> {}, plot {}",
+            out.display(),
+            svg.display()
+        );
     }
     Ok(samples)
 }

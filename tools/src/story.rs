@@ -59,8 +59,21 @@ fn est(e: &Estimate) -> String {
     format!("{:.5} ± {:.2e}", e.value, e.std_err)
 }
 
-/// `crane identify`: every parameter from a data set, written to `out` (TOML).
-pub fn identify(dataset: &Path, out: &Path, json: bool) -> Result<Identified> {
+/// The true parameters the virtual rig left next to its data set, if any.
+fn rig_truth(dataset: &Path) -> Result<Option<crane_model::Params>> {
+    let path = dataset.join(crane_ident::campaign::TRUTH_FILE);
+    if !path.exists() {
+        return Ok(None);
+    }
+    let p = ParamsFile::read(&path)
+        .map_err(anyhow::Error::msg)
+        .with_context(|| format!("read {}", path.display()))?;
+    Ok(Some(crane_model::Params::from(&p)))
+}
+
+/// `crane identify`: every parameter from a data set, written to `out` (TOML); friction
+/// plots with their bands into `plots` (SVG).
+pub fn identify(dataset: &Path, out: &Path, plots: &Path, json: bool) -> Result<Identified> {
     let pb = spinner("identifying");
     let id = crane_ident::identify::identify(dataset)
         .with_context(|| format!("identify from {}", dataset.display()))?;
@@ -71,6 +84,8 @@ pub fn identify(dataset: &Path, out: &Path, json: bool) -> Result<Identified> {
     id.params
         .write(out)
         .with_context(|| format!("write {}", out.display()))?;
+    let truth = rig_truth(dataset)?;
+    let files = crate::plot::friction(&id, truth.as_ref(), plots)?;
     if json {
         println!("{}", serde_json::to_string_pretty(&id)?);
         return Ok(id);
@@ -97,15 +112,27 @@ pub fn identify(dataset: &Path, out: &Path, json: bool) -> Result<Identified> {
         }
         for (dir, f) in [("+", &d.dry_pos), ("-", &d.dry_neg)] {
             let c: Vec<String> = f.coefficients.iter().map(|c| format!("{c:.3}")).collect();
+            let widest = f
+                .curve
+                .simultaneous_upper
+                .iter()
+                .zip(&f.curve.mean)
+                .map(|(u, m)| u - m)
+                .fold(0.0, f64::max);
             println!(
-                "| {axis} Cbar{dir}(p) c0..c4 [N] | {} ({} probes) |",
+                "| {axis} Cbar{dir}(p) c0..c4 [N] | {} ({} probes; 95 % band over the axis: mean ± {:.2} std, at most ± {:.3} N) |",
                 c.join(", "),
-                f.positions.len()
+                f.positions.len(),
+                f.curve.simultaneous_multiplier,
+                widest
             );
         }
     }
     println!("| D_alpha [kg m^2/s] | {} |", est(&id.swing.damping_alpha));
     println!("| D_beta [kg m^2/s] | {} |", est(&id.swing.damping_beta));
+    for f in files {
+        println!("plot: {}", f.display());
+    }
     Ok(id)
 }
 
@@ -190,7 +217,7 @@ pub fn demo(out: &Path, json: bool) -> Result<()> {
     let params = out.join("params.toml");
     let plots = out.join("plots");
     rig(&dataset, None, json)?;
-    identify(&dataset, &params, json)?;
+    identify(&dataset, &params, &plots, json)?;
     validate(&dataset, &params, &plots, json)?;
     Ok(())
 }

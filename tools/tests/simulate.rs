@@ -1,5 +1,6 @@
 //! `crane simulate`: the default scenario writes a run that loads back in the data format and
-//! moves every drive; a bad scenario gets an error naming the field.
+//! moves every drive, and a valid SVG plot beside it; a bad scenario gets an error naming the
+//! field.
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -39,6 +40,40 @@ fn default_scenario_writes_a_loadable_run_with_motion() {
                 (a.min(x), b.max(x))
             });
         assert!(hi - lo > 1e-3, "{name} did not move: range {}", hi - lo);
+    }
+    // the plot beside the CSV: a well-formed SVG with three lines in each of the three
+    // panels (positions, velocities, voltages) and mode bands of all three modes
+    let svg = dir.join("sim.svg");
+    let text = std::fs::read_to_string(&svg).expect("sim.svg beside sim.csv");
+    let doc = roxmltree::Document::parse(&text).expect("well-formed SVG (XML)");
+    assert_eq!(doc.root_element().tag_name().name(), "svg");
+    let count = |tag: &str| {
+        doc.descendants()
+            .filter(|n| n.tag_name().name() == tag)
+            .count()
+    };
+    assert!(count("polyline") >= 9, "{} lines", count("polyline"));
+    let texts: String = doc
+        .descendants()
+        .filter(|n| n.is_text())
+        .filter_map(|n| n.text())
+        .collect::<Vec<_>>()
+        .join("|");
+    for title in ["drive positions", "drive velocities", "voltages", "modes"] {
+        assert!(texts.contains(title), "no panel `{title}`");
+    }
+    // the default multisine drives X both ways and stops it: red, yellow and green bands
+    let fills: Vec<&str> = doc
+        .descendants()
+        .filter(|n| n.tag_name().name() == "rect")
+        .filter_map(|n| n.attribute("fill"))
+        .collect();
+    for colour in ["#F09696", "#FAE178", "#96D796"] {
+        assert!(
+            fills.iter().any(|f| f.eq_ignore_ascii_case(colour)),
+            "no mode band of colour {colour}: {:?}",
+            &fills[..fills.len().min(8)]
+        );
     }
 }
 
