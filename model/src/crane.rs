@@ -2,7 +2,7 @@
 
 use crate::dynamics::{eval, Coeffs, Law};
 use crate::extensions::{deadband, DelayLine, Extensions};
-use crate::integrator::{step_hybrid, step_smooth, StepReport};
+use crate::integrator::{step_hybrid, step_smooth, StepReport, MAX_SEGMENTS};
 use crate::modes::Mode;
 use crate::params::{check, Error, Params, Problem};
 use crate::real::Real;
@@ -210,6 +210,7 @@ pub struct Crane<R: Real = f64> {
     u_last: [R; 3],
     delay: DelayLine<R>,
     delay_steps: [usize; 3],
+    segments: usize,
 }
 
 impl<R: Real> Crane<R> {
@@ -242,6 +243,7 @@ impl<R: Real> Crane<R> {
             u_last: [R::ZERO; 3],
             delay: DelayLine::new(R::ZERO),
             delay_steps: [0; 3],
+            segments: MAX_SEGMENTS,
         })
     }
 
@@ -252,6 +254,41 @@ impl<R: Real> Crane<R> {
         self.delay_steps = ext.validate(self.h64)?;
         self.coeffs.extend(ext);
         Ok(self)
+    }
+
+    /// Sets the segment budget of a step: how many integration segments (one more than the
+    /// located events) one step may use, `1..=MAX_SEGMENTS` ([`MAX_SEGMENTS`] = 8 is the
+    /// default, and setting it again changes nothing, bit for bit). A real-time bound on the
+    /// work of a step: when the budget is used up, the last segment integrates to the step end
+    /// and the events it detects are applied there, unlocated (counted in
+    /// [`StepReport::late_resets`]; a breakaway is then released by the next step's
+    /// resolution). Budget 1 locates nothing and costs at most 15 evaluation-sized pieces of
+    /// work per step (NUMERICS.md "One step").
+    ///
+    /// Error `"config.segment_budget"` (`NotPositive` for 0, `TooLarge` above
+    /// [`MAX_SEGMENTS`]); the hybrid law only uses it.
+    pub fn with_segment_budget(mut self, segments: usize) -> Result<Self, Error> {
+        let problem = if segments == 0 {
+            Some(Problem::NotPositive)
+        } else if segments > MAX_SEGMENTS {
+            Some(Problem::TooLarge)
+        } else {
+            None
+        };
+        if let Some(problem) = problem {
+            return Err(Error {
+                field: "config.segment_budget",
+                problem,
+                value: segments as f64,
+            });
+        }
+        self.segments = segments;
+        Ok(self)
+    }
+
+    /// The segment budget of a step (see [`Crane::with_segment_budget`]).
+    pub fn segment_budget(&self) -> usize {
+        self.segments
     }
 
     /// Advances by one step `h` with input voltages `u = [u_x, u_y, u_l]` [V], held constant
@@ -285,7 +322,14 @@ impl<R: Real> Crane<R> {
             }
         }
         let (state, modes, report) = match self.law {
-            Law::Hybrid => step_hybrid(&self.coeffs, self.h, &self.state, &self.modes, &uc)?,
+            Law::Hybrid => step_hybrid(
+                &self.coeffs,
+                self.h,
+                &self.state,
+                &self.modes,
+                &uc,
+                self.segments,
+            )?,
             Law::Tanh(gamma) => {
                 let s = step_smooth(&self.coeffs, gamma, self.h, &self.state, &uc)?;
                 let modes = [0, 1, 2].map(|i| Mode::of_velocity(s.qd[i].to_f64()));

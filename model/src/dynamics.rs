@@ -231,7 +231,7 @@ pub fn eval<R: Real>(
 ) -> Result<Eval<R>, Singular> {
     let [_, _, l, a, b] = y.q;
     let [_, _, ld, ad, bd] = y.qd;
-    let (sa, ca, sb, cb) = (a.sin(), a.cos(), b.sin(), b.cos());
+    let ((sa, ca), (sb, cb)) = (a.sin_cos(), b.sin_cos());
     let mp = c.mp;
     let mpl = mp * l;
     let ad2 = ad * ad;
@@ -328,7 +328,7 @@ pub(crate) fn end_stop_impulse<R: Real>(
     i: usize,
 ) -> Result<(), Singular> {
     let [_, _, l, a, b] = y.q;
-    let (sa, ca, sb, cb) = (a.sin(), a.cos(), b.sin(), b.cos());
+    let ((sa, ca), (sb, cb)) = (a.sin_cos(), b.sin_cos());
     let mut am = mass_matrix(c, l, sa, ca, sb, cb);
     let z = R::ZERO;
     let mut held = [false; 5];

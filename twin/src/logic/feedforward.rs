@@ -67,8 +67,7 @@ pub fn voltages<R: Real>(
     let Ok(e) = dynamics::eval(c, Law::Hybrid, &y, &[Mode::Stopped; 3], &zero) else {
         return zero;
     };
-    let (sa, ca) = (y.q[3].sin(), y.q[3].cos());
-    let (sb, cb) = (y.q[4].sin(), y.q[4].cos());
+    let ((sa, ca), (sb, cb)) = (y.q[3].sin_cos(), y.q[4].sin_cos());
     let mp = c.mp;
     let m02 = mp * sa * sb;
     let m12 = mp * ca;

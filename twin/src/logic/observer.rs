@@ -113,8 +113,6 @@ pub struct Update<R: Real> {
 /// The twin with its observer.
 #[derive(Clone, Debug)]
 pub struct Observer<R: Real> {
-    params: Params,
-    config: Config,
     twin: Crane<R>,
     g_alpha: R,
     g_beta: R,
@@ -172,8 +170,6 @@ impl<R: Real> Observer<R> {
         let axes = params.axes();
         let d = |i: usize| R::from_f64(m[i] * 2.0 * gains.gamma / (t * t));
         Ok(Observer {
-            params: *params,
-            config,
             twin,
             g_alpha: R::from_f64(gains.alpha),
             g_beta: R::from_f64(gains.beta / t),
@@ -193,6 +189,14 @@ impl<R: Real> Observer<R> {
             mean_sq: [R::ZERO; 5],
             counters: Counters::default(),
         })
+    }
+
+    /// Sets the twin's segment budget ([`Crane::with_segment_budget`]: at most `segments`
+    /// integration segments per period, events beyond it applied at the period's end), a
+    /// bound on the work of one update. Errors name `"config.segment_budget"`.
+    pub fn with_segment_budget(mut self, segments: usize) -> Result<Self, Error> {
+        self.twin = self.twin.with_segment_budget(segments)?;
+        Ok(self)
     }
 
     /// One period: predict with the voltages `u` [V] applied during the period that just
@@ -250,9 +254,9 @@ impl<R: Real> Observer<R> {
             q: q.map(R::to_f64),
             qd: qd.map(R::to_f64),
         };
-        match Crane::<R>::new(&self.params, self.config, corrected) {
-            Ok(c) => self.twin = c,
-            Err(_) => self.counters.correction_errors += 1,
+        // Same checks and mode rules as `Crane::new`; keeps extensions and the segment budget.
+        if self.twin.set_state(corrected).is_err() {
+            self.counters.correction_errors += 1;
         }
         for (ms, ri) in self.mean_sq.iter_mut().zip(r) {
             *ms = *ms + self.lambda * (ri * ri - *ms);
