@@ -75,3 +75,49 @@ fn sincos_gives_the_bits_of_sin_and_cos() {
     }
     assert!(checked > 6_000_000);
 }
+
+/// `crane_model::hangs` answers `true` inside the swing stops without computing
+/// `sin(alpha) cos(beta) >= MIN_HANG`; the formula gives the same answer everywhere (f64 and
+/// f32), so the model's domain checks keep the reference's decisions.
+#[test]
+fn hangs_shortcut_gives_the_formulas_answer() {
+    use crane_model::{hangs, MIN_HANG, SWING_STOP};
+    let half_pi = core::f64::consts::FRAC_PI_2;
+    let mut rng = Rng(0x2545_F491_4F6C_DD1D);
+    let (mut in_box, mut out_of_domain) = (0usize, 0usize);
+    for k in 0..2_000_000u32 {
+        let u = |r: &mut Rng| (r.next() >> 11) as f64 / (1u64 << 53) as f64;
+        // alpha over (0, pi), beta over (-pi/2, pi/2), denser near the box edges.
+        let (a, b) = if k % 2 == 0 {
+            (
+                core::f64::consts::PI * u(&mut rng),
+                3.1 * (u(&mut rng) - 0.5),
+            )
+        } else {
+            let ea = (half_pi + SWING_STOP) + 1e-3 * (u(&mut rng) - 0.5);
+            let eb = SWING_STOP + 1e-3 * (u(&mut rng) - 0.5);
+            (
+                if k % 4 == 1 {
+                    ea
+                } else {
+                    half_pi - (ea - half_pi)
+                },
+                eb,
+            )
+        };
+        let formula = libm::sin(a) * libm::cos(b) >= MIN_HANG;
+        assert_eq!(hangs(a, b), formula, "f64 alpha {a} beta {b}");
+        let (af, bf) = (a as f32, b as f32);
+        let formula32 = libm::sinf(af) * libm::cosf(bf) >= MIN_HANG as f32;
+        assert_eq!(hangs(af, bf), formula32, "f32 alpha {af} beta {bf}");
+        let boxed = a >= half_pi - SWING_STOP && a <= half_pi + SWING_STOP && b.abs() <= SWING_STOP;
+        in_box += usize::from(boxed);
+        out_of_domain += usize::from(!formula);
+    }
+    assert!(hangs(half_pi, 0.0) && !hangs(f64::NAN, 0.0) && !hangs(0.01, 1.55));
+    // Both answers, and both sides of the box edges, were exercised.
+    assert!(
+        in_box > 500_000 && out_of_domain > 10_000,
+        "{in_box} {out_of_domain}"
+    );
+}

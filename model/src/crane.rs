@@ -162,10 +162,25 @@ fn admit<R: Real>(c: &Coeffs<R>, init: &State<f64>) -> Result<(State<R>, [Mode; 
     ))
 }
 
-/// `sin(alpha) cos(beta) >= MIN_HANG` (see [`MIN_HANG`]).
+/// `sin(alpha) cos(beta) >= MIN_HANG` (see [`MIN_HANG`]) for a state.
 fn in_domain<R: Real>(s: &State<R>) -> bool {
-    let hang = s.q[3].sin() * s.q[4].cos();
-    hang >= R::from_f64(MIN_HANG)
+    hangs(s.q[3], s.q[4])
+}
+
+/// Whether swing angles `alpha`, `beta` [rad] are in the model's domain:
+/// `sin(alpha) cos(beta) >= MIN_HANG` (libm `sin`, `cos` in `R`; NaN gives `false`).
+///
+/// Inside the swing stops (`alpha` within `pi/2 +- SWING_STOP`, `|beta| <= SWING_STOP`) the
+/// product is at least `cos(1.4)^2 = 0.0289`, far above `MIN_HANG = 0.02` (and above any
+/// rounding of `sin`, `cos` in f64, f32 or `F32x`), so the answer there is `true` without
+/// the trigonometry: the same answer, at the cost of four comparisons.
+pub fn hangs<R: Real>(alpha: R, beta: R) -> bool {
+    let (a, b) = (alpha.to_f64(), beta.to_f64());
+    let (half_pi, stop) = (core::f64::consts::FRAC_PI_2, crate::integrator::SWING_STOP);
+    if a >= half_pi - stop && a <= half_pi + stop && b >= -stop && b <= stop {
+        return true;
+    }
+    alpha.sin() * beta.cos() >= R::from_f64(MIN_HANG)
 }
 
 impl From<Singular> for StepError {

@@ -273,6 +273,12 @@ pub(crate) fn step_hybrid<R: Real>(
     for seg in 0..budget {
         let tau = h - done;
         let (yn, e4) = rk4(c, law, &y, u, &modes, &e1, tau)?;
+        if seg + 1 == budget {
+            // The last segment locates nothing (so it does not search either): whatever it
+            // crossed is reset at the step end by the late sweep.
+            y = yn;
+            break;
+        }
         // Earliest event in this segment, as a fraction of tau.
         let mut first: Option<(R, usize, Kind)> = None;
         let mut consider = |th: R, i: usize, k: Kind| {
@@ -320,10 +326,6 @@ pub(crate) fn step_hybrid<R: Real>(
             y = yn;
             break;
         };
-        if seg + 1 == budget {
-            y = yn;
-            break;
-        }
         let s = th * tau;
         let (ye, _) = rk4(c, law, &y, u, &modes, &e1, s)?;
         y = ye;

@@ -16,7 +16,7 @@
 //! measurement is not used (the twin runs open loop for that period). The twin's state stays
 //! finite in every case: the model itself rejects steps that would leave it non-finite.
 
-use crane_model::{Config, Crane, Error, Mode, Params, Real, State, StepError, MIN_HANG};
+use crane_model::{hangs, Config, Crane, Error, Mode, Params, Real, State, StepError};
 
 /// Observer gains (in `f64`; converted once to the twin's scalar type).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -241,8 +241,7 @@ impl<R: Real> Observer<R> {
         }
         let a = q[3] + self.s_alpha * r[3];
         let b = q[4] + self.s_alpha * r[4];
-        let hang = a.sin() * b.cos();
-        if hang >= R::from_f64(MIN_HANG) {
+        if hangs(a, b) {
             q[3] = a;
             q[4] = b;
             qd[3] = qd[3] + self.s_beta * r[3];
