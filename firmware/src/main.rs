@@ -16,13 +16,20 @@
 
 use core::fmt::Write;
 use cortex_m_rt::entry;
-use cortex_m_semihosting::{debug, hio};
+use cortex_m_semihosting::debug;
+#[cfg(not(feature = "probe"))]
+use cortex_m_semihosting::hio;
 use crane_model::{dynamics, Config, Crane, Law, Mode, Params, Real, MAX_SEGMENTS};
 use crane_twin::board::SimBus;
 use crane_twin::logic::control::{Controller, LoopConfig, DEMO, F64_SEGMENT_BUDGET};
 use crane_twin::logic::fastmath::F32x;
 use crane_twin::logic::plant::{demo_init, demo_plant, demo_twin_init, run_demo_with};
 use crane_twin::logic::scenarios::{run, InputGen, Scenario, SCENARIOS};
+#[cfg(feature = "probe")]
+use defmt_rtt as _;
+#[cfg(feature = "probe")]
+use panic_probe as _;
+#[cfg(not(feature = "probe"))]
 use panic_semihosting as _;
 
 /// Start of a measured interval (watched by the instruction-counting plugin).
@@ -41,10 +48,13 @@ pub extern "C" fn bench_stop() {
     cortex_m::asm::nop();
 }
 
-/// Semihosting stdout, one host call per line.
+/// The transcript, one line at a time: semihosting stdout (QEMU, CI), or with the `probe`
+/// feature a defmt frame per line over RTT (a real board: semihosting would halt the core
+/// without a debugger).
 struct Out {
     buf: [u8; 512],
     len: usize,
+    #[cfg(not(feature = "probe"))]
     stream: Option<hio::HostStream>,
 }
 
@@ -53,14 +63,24 @@ impl Out {
         Out {
             buf: [0; 512],
             len: 0,
+            #[cfg(not(feature = "probe"))]
             stream: hio::hstdout().ok(),
         }
     }
 
+    #[cfg(not(feature = "probe"))]
     fn flush(&mut self) {
         if let Some(s) = self.stream.as_mut() {
             let _ = s.write_all(&self.buf[..self.len]);
         }
+        self.len = 0;
+    }
+
+    #[cfg(feature = "probe")]
+    fn flush(&mut self) {
+        let line = self.buf.get(..self.len).unwrap_or(&[]);
+        let line = line.strip_suffix(b"\n").unwrap_or(line);
+        defmt::println!("{=[u8]:a}", line);
         self.len = 0;
     }
 }
@@ -126,10 +146,15 @@ fn closed_loop<R: Real>(tag: &str, cfg: &LoopConfig, out: &mut Out) -> bool {
     };
     let bus = SimBus::new(plant);
     let mut io = bus.io();
-    matches!(
-        run_demo_with::<R, _, _>(&mut io, cfg, tag, out),
-        Ok(Some(_))
-    )
+    match run_demo_with::<R, _, _>(&mut io, cfg, tag, out) {
+        Ok(Some(_summary)) => {
+            // The loop's records as structured defmt values (`crane-twin/defmt`).
+            #[cfg(feature = "probe")]
+            defmt::println!("loop {=str}: counters {}", tag, _summary.counters);
+            true
+        }
+        _ => false,
+    }
 }
 
 /// Cost of `Crane::<R>::step` with segment budget `budget` over a scenario, one interval per
