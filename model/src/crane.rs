@@ -277,7 +277,7 @@ impl<R: Real> Crane<R> {
     /// work of a step: when the budget is used up, the last segment integrates to the step end
     /// and the events it detects are applied there, unlocated (counted in
     /// [`StepReport::late_resets`]; a breakaway is then released by the next step's
-    /// resolution). Budget 1 locates nothing and costs at most 15 evaluation-sized pieces of
+    /// resolution). Budget 1 locates nothing and costs at most 12 evaluation-sized pieces of
     /// work per step (NUMERICS.md "One step").
     ///
     /// Error `"config.segment_budget"` (`NotPositive` for 0, `TooLarge` above

@@ -19,9 +19,9 @@
 //! Worst case for budget `n`, counted in evaluations of the dynamics and end-stop solves
 //! (each about one evaluation's work): the initial resolution (4), per segment but the last
 //! one RK4 (3), relocation (3), at most 3 end-stop solves and a resolution (4), then the last
-//! segment's RK4 (3) and the step end (at most 3 + 2 + 3 end-stop solves: late resets, swing
-//! stops, resets after a swing stop): `13 (n - 1) + 15` pieces, 106 for the default 8 and 15
-//! for budget 1; the usual step without event costs 4 evaluations whatever the budget.
+//! segment's RK4 (3) and the step end (at most 3 + 2 end-stop solves: each drive axis is
+//! stopped at most once by the two late sweeps, and two swing stops): `13 (n - 1) + 12`
+//! pieces, 103 for the default 8 and 12 for budget 1; the usual step without event costs 4 evaluations whatever the budget.
 
 use crate::dynamics::{end_stop_impulse, eval, Coeffs, Eval, Law, Singular};
 use crate::modes::{candidate, margin, resolve, Mode};
