@@ -24,6 +24,7 @@ cargo clippy --workspace --all-targets -- -D warnings
 
 step "clippy (firmware, thumbv7em-none-eabihf)"
 cargo clippy -p firmware --target thumbv7em-none-eabihf -- -D warnings
+cargo clippy -p firmware --target thumbv7em-none-eabihf --features probe -- -D warnings && cargo build -p firmware --target thumbv7em-none-eabihf --release --features probe
 
 step "firmware cross build (release)"
 cargo build -p firmware --target thumbv7em-none-eabihf --release

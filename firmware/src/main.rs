@@ -16,13 +16,20 @@
 
 use core::fmt::Write;
 use cortex_m_rt::entry;
-use cortex_m_semihosting::{debug, hio};
-use crane_model::{dynamics, Config, Crane, Law, Mode, Params, Real};
+use cortex_m_semihosting::debug;
+#[cfg(not(feature = "probe"))]
+use cortex_m_semihosting::hio;
+use crane_model::{dynamics, Config, Crane, Law, Mode, Params, Real, MAX_SEGMENTS};
 use crane_twin::board::SimBus;
-use crane_twin::logic::control::{Controller, LoopConfig, DEMO};
+use crane_twin::logic::control::{Controller, LoopConfig, DEMO, F64_SEGMENT_BUDGET};
 use crane_twin::logic::fastmath::F32x;
-use crane_twin::logic::plant::{demo_init, demo_plant, demo_twin_init, run_demo};
+use crane_twin::logic::plant::{demo_init, demo_plant, demo_twin_init, run_demo_with};
 use crane_twin::logic::scenarios::{run, InputGen, Scenario, SCENARIOS};
+#[cfg(feature = "probe")]
+use defmt_rtt as _;
+#[cfg(feature = "probe")]
+use panic_probe as _;
+#[cfg(not(feature = "probe"))]
 use panic_semihosting as _;
 
 /// Start of a measured interval (watched by the instruction-counting plugin).
@@ -41,10 +48,13 @@ pub extern "C" fn bench_stop() {
     cortex_m::asm::nop();
 }
 
-/// Semihosting stdout, one host call per line.
+/// The transcript, one line at a time: semihosting stdout (QEMU, CI), or with the `probe`
+/// feature a defmt frame per line over RTT (a real board: semihosting would halt the core
+/// without a debugger).
 struct Out {
     buf: [u8; 512],
     len: usize,
+    #[cfg(not(feature = "probe"))]
     stream: Option<hio::HostStream>,
 }
 
@@ -53,14 +63,24 @@ impl Out {
         Out {
             buf: [0; 512],
             len: 0,
+            #[cfg(not(feature = "probe"))]
             stream: hio::hstdout().ok(),
         }
     }
 
+    #[cfg(not(feature = "probe"))]
     fn flush(&mut self) {
         if let Some(s) = self.stream.as_mut() {
             let _ = s.write_all(&self.buf[..self.len]);
         }
+        self.len = 0;
+    }
+
+    #[cfg(feature = "probe")]
+    fn flush(&mut self) {
+        let line = self.buf.get(..self.len).unwrap_or(&[]);
+        let line = line.strip_suffix(b"\n").unwrap_or(line);
+        defmt::println!("{=[u8]:a}", line);
         self.len = 0;
     }
 }
@@ -111,19 +131,38 @@ fn stack_used(window: (usize, usize)) -> usize {
     sp0 - p
 }
 
-/// Closed loop on the simulated board (embedded-hal path): 4000 periods of 2 ms.
-fn closed_loop<R: Real>(tag: &str, out: &mut Out) -> bool {
+/// Loop settings of the f64 twin: the library defaults with the real-time segment budget.
+fn f64_loop() -> LoopConfig {
+    LoopConfig {
+        segment_budget: F64_SEGMENT_BUDGET,
+        ..LoopConfig::default()
+    }
+}
+
+/// Closed loop on the simulated board (embedded-hal path): 4000 periods of 2 ms. Never
+/// inlined, so its frame (the board, plant and controller) is below the painted window.
+#[inline(never)]
+fn closed_loop<R: Real>(tag: &str, cfg: &LoopConfig, out: &mut Out) -> bool {
     let Ok(plant) = demo_plant() else {
         return false;
     };
     let bus = SimBus::new(plant);
     let mut io = bus.io();
-    matches!(run_demo::<R, _, _>(&mut io, tag, out), Ok(Some(_)))
+    match run_demo_with::<R, _, _>(&mut io, cfg, tag, out) {
+        Ok(Some(_summary)) => {
+            // The loop's records as structured defmt values (`crane-twin/defmt`).
+            #[cfg(feature = "probe")]
+            defmt::println!("loop {=str}: counters {}", tag, _summary.counters);
+            true
+        }
+        _ => false,
+    }
 }
 
-/// Cost of `Crane::<R>::step` over a scenario, one interval per step.
-fn bench_model<R: Real>(tag: &str, sc: &Scenario, out: &mut Out) -> bool {
-    let Ok(mut crane) = sc.crane::<R>() else {
+/// Cost of `Crane::<R>::step` with segment budget `budget` over a scenario, one interval per
+/// step.
+fn bench_model<R: Real>(tag: &str, sc: &Scenario, budget: usize, out: &mut Out) -> bool {
+    let Ok(mut crane) = sc.crane::<R>().and_then(|c| c.with_segment_budget(budget)) else {
         return false;
     };
     let _ = writeln!(out, "BENCH model_step_{tag}_{} {}", sc.name, sc.steps);
@@ -138,16 +177,28 @@ fn bench_model<R: Real>(tag: &str, sc: &Scenario, out: &mut Out) -> bool {
     true
 }
 
-/// Cost of rebuilding the twin from a corrected state (`Crane::new`, what the observer does
-/// every period while the model has no state setter).
-fn bench_rebuild<R: Real>(tag: &str, n: u32, out: &mut Out) -> bool {
+/// Cost of setting the twin to a corrected state (`Crane::set_state`, what the observer does
+/// every period), and, for comparison, of rebuilding it (`Crane::new`, what it did before).
+fn bench_set_state<R: Real>(tag: &str, n: u32, out: &mut Out) -> bool {
     let params = Params::default();
     let config = Config {
         h: 2e-3,
         ..Config::default()
     };
-    let _ = writeln!(out, "BENCH twin_rebuild_{tag} {n}");
+    let Ok(mut twin) = Crane::<R>::new(&params, config, demo_init()) else {
+        return false;
+    };
     let mut ok = true;
+    let _ = writeln!(out, "BENCH twin_set_state_{tag} {n}");
+    for k in 0..n {
+        let mut s = demo_init();
+        s.qd[0] = f64::from(k) * 1e-3;
+        bench_start();
+        let r = twin.set_state(core::hint::black_box(s));
+        bench_stop();
+        ok &= r.is_ok();
+    }
+    let _ = writeln!(out, "BENCH twin_rebuild_{tag} {n}");
     for k in 0..n {
         let mut s = demo_init();
         s.qd[0] = f64::from(k) * 1e-3;
@@ -186,8 +237,10 @@ fn bench_eval<R: Real>(tag: &str, n: u32, out: &mut Out) -> bool {
 
 /// Cost of one full control period (reference, encoders, observer with its model step,
 /// feedforward, PD, PWM write), on the simulated board; the plant's own step is outside.
-fn bench_period<R: Real>(tag: &str, periods: u32, out: &mut Out) -> bool {
-    let cfg = LoopConfig::default();
+/// Never inlined (its frame counts in the stack figure).
+#[inline(never)]
+fn bench_period<R: Real>(tag: &str, cfg: &LoopConfig, periods: u32, out: &mut Out) -> bool {
+    let cfg = *cfg;
     let Ok(plant) = demo_plant() else {
         return false;
     };
@@ -224,35 +277,40 @@ fn main() -> ! {
     let _ = writeln!(out, "STACK scenarios {}", stack_used(w));
 
     let w = paint_stack();
-    ok &= closed_loop::<f64>("f64", &mut out);
+    let default = LoopConfig::default();
+    ok &= closed_loop::<f64>("f64", &f64_loop(), &mut out);
     let _ = writeln!(out, "STACK loop_f64 {}", stack_used(w));
     let w = paint_stack();
-    ok &= closed_loop::<f32>("f32", &mut out);
+    ok &= closed_loop::<f32>("f32", &default, &mut out);
     let _ = writeln!(out, "STACK loop_f32 {}", stack_used(w));
     let w = paint_stack();
-    ok &= closed_loop::<F32x>("f32x", &mut out);
+    ok &= closed_loop::<F32x>("f32x", &default, &mut out);
     let _ = writeln!(out, "STACK loop_f32x {}", stack_used(w));
 
     let w = paint_stack();
-    ok &= bench_period::<f64>("f64", 4000, &mut out);
+    ok &= bench_period::<f64>("f64", &f64_loop(), 4000, &mut out);
     let _ = writeln!(out, "STACK period_f64 {}", stack_used(w));
     let w = paint_stack();
-    ok &= bench_period::<f32>("f32", 4000, &mut out);
+    ok &= bench_period::<f64>("f64_budget8", &default, 4000, &mut out);
+    let _ = writeln!(out, "STACK period_f64_budget8 {}", stack_used(w));
+    let w = paint_stack();
+    ok &= bench_period::<f32>("f32", &default, 4000, &mut out);
     let _ = writeln!(out, "STACK period_f32 {}", stack_used(w));
     let w = paint_stack();
-    ok &= bench_period::<F32x>("f32x", 4000, &mut out);
+    ok &= bench_period::<F32x>("f32x", &default, 4000, &mut out);
     let _ = writeln!(out, "STACK period_f32x {}", stack_used(w));
     for sc in [&SCENARIOS[1], &SCENARIOS[3]] {
-        ok &= bench_model::<f64>("f64", sc, &mut out);
-        ok &= bench_model::<f32>("f32", sc, &mut out);
-        ok &= bench_model::<F32x>("f32x", sc, &mut out);
+        ok &= bench_model::<f64>("f64", sc, MAX_SEGMENTS, &mut out);
+        ok &= bench_model::<f64>("f64_budget1", sc, 1, &mut out);
+        ok &= bench_model::<f32>("f32", sc, MAX_SEGMENTS, &mut out);
+        ok &= bench_model::<F32x>("f32x", sc, MAX_SEGMENTS, &mut out);
     }
     ok &= bench_eval::<f64>("f64", 100, &mut out);
     ok &= bench_eval::<f32>("f32", 100, &mut out);
     ok &= bench_eval::<F32x>("f32x", 100, &mut out);
-    ok &= bench_rebuild::<f64>("f64", 100, &mut out);
-    ok &= bench_rebuild::<f32>("f32", 100, &mut out);
-    ok &= bench_rebuild::<F32x>("f32x", 100, &mut out);
+    ok &= bench_set_state::<f64>("f64", 100, &mut out);
+    ok &= bench_set_state::<f32>("f32", 100, &mut out);
+    ok &= bench_set_state::<F32x>("f32x", 100, &mut out);
 
     let _ = writeln!(out, "DONE {}", if ok { "ok" } else { "FAILED" });
     debug::exit(if ok {

@@ -556,6 +556,8 @@ pub struct RefCrane {
     /// Saturated inputs pushed into the delay line by the accepted steps, oldest first (only
     /// the last `MAX_DELAY_STEPS` are kept).
     pushed: std::collections::VecDeque<[f64; 3]>,
+    /// Segments one hybrid step may use (NUMERICS.md "One step"; `MAX_SEGMENTS` unless set).
+    segment_budget: usize,
 }
 
 impl RefCrane {
@@ -633,6 +635,7 @@ impl RefCrane {
             ext: RefExtensions::default(),
             delay_steps: [0; 3],
             pushed: std::collections::VecDeque::new(),
+            segment_budget: MAX_SEGMENTS,
         })
     }
 
@@ -681,6 +684,17 @@ impl RefCrane {
             self.delay_steps[i] = n as usize;
         }
         self.ext = ext.clone();
+        Ok(self)
+    }
+
+    /// Sets the segment budget of a hybrid step (NUMERICS.md "One step": the loop runs over at
+    /// most `budget` segments and the last one locates nothing). Rejects 0 and more than
+    /// `MAX_SEGMENTS`.
+    pub fn with_segment_budget(mut self, budget: usize) -> Result<Self, RefError> {
+        if budget == 0 || budget > MAX_SEGMENTS {
+            return Err(RefError::InvalidConfig("segment_budget"));
+        }
+        self.segment_budget = budget;
         Ok(self)
     }
 
@@ -1147,7 +1161,8 @@ impl RefCrane {
         let mut y = self.y;
         let mut s_done = 0.0_f64;
         let (mut modes, mut e1) = self.resolve(&y, u, self.modes)?;
-        for seg in 0..MAX_SEGMENTS {
+        let last = self.segment_budget - 1;
+        for seg in 0..self.segment_budget {
             info.segments = seg + 1;
             let tau = h - s_done;
             let (yn, e4) = self.rk4(&y, &e1, tau, &modes, u)?;
@@ -1205,7 +1220,7 @@ impl RefCrane {
                 }
             }
 
-            if !any || seg == MAX_SEGMENTS - 1 {
+            if !any || seg == last {
                 y = yn;
                 break;
             }

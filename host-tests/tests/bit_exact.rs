@@ -199,6 +199,8 @@ struct Case {
     programs: [Program; 3],
     /// `None`: the paper's model (no `with_extensions` call at all).
     ext: Option<Extensions>,
+    /// `Some(n)`: `with_segment_budget(n)` on both (1..=8); `None`: the default, no call.
+    budget: Option<usize>,
 }
 
 fn case_strategy() -> impl Strategy<Value = Case> {
@@ -209,14 +211,16 @@ fn case_strategy() -> impl Strategy<Value = Case> {
             prop_oneof![Just(1e-3), Just(2e-3)],
             prop::array::uniform3(program_strategy()),
             prop_oneof![Just(None), extensions_strategy(p).prop_map(Some)],
+            prop_oneof![2 => Just(None), 1 => (1usize..=8).prop_map(Some)],
         )
-            .prop_map(|(params, (q, qd), h, programs, ext)| Case {
+            .prop_map(|(params, (q, qd), h, programs, ext, budget)| Case {
                 params,
                 q,
                 qd,
                 h,
                 programs,
                 ext,
+                budget,
             })
     })
 }
@@ -249,6 +253,9 @@ struct Stats {
     /// Cases with at least one located limit event (end-stop impulse).
     cases_with_end_stop: usize,
     late_resets: usize,
+    /// Cases with a segment budget below the default, and their late resets.
+    budgeted: usize,
+    budgeted_late_resets: usize,
     fewest_transitions: Option<usize>,
 }
 
@@ -266,6 +273,8 @@ impl Stats {
         self.cases_stuck_at_end += o.cases_stuck_at_end;
         self.cases_with_end_stop += o.cases_with_end_stop;
         self.late_resets += o.late_resets;
+        self.budgeted += o.budgeted;
+        self.budgeted_late_resets += o.budgeted_late_resets;
         self.fewest_transitions = match (self.fewest_transitions, o.fewest_transitions) {
             (Some(a), Some(b)) => Some(a.min(b)),
             (a, b) => a.or(b),
@@ -279,12 +288,18 @@ fn run_case(case: &Case, law: FrictionLaw, steps: usize) -> Result<Stats, TestCa
         Some(e) => pair_ext(&case.params, case.h, law, case.q, case.qd, e),
         None => pair(&case.params, case.h, law, case.q, case.qd),
     };
+    if let Some(n) = case.budget {
+        m = m.with_segment_budget(n).expect("budget 1..=8 is valid");
+        r = r.with_segment_budget(n).expect("budget 1..=8 is valid");
+    }
+    let budget = case.budget.unwrap_or(crane_model::MAX_SEGMENTS);
     if let Some(msg) = compare(0, &m, &r) {
         return Err(TestCaseError::fail(format!("after new(): {msg}")));
     }
     let mut st = Stats {
         cases: 1,
         with_extensions: usize::from(case.ext.is_some()),
+        budgeted: usize::from(budget < crane_model::MAX_SEGMENTS),
         steps,
         ..Stats::default()
     };
@@ -311,6 +326,13 @@ fn run_case(case: &Case, law: FrictionLaw, steps: usize) -> Result<Stats, TestCa
                     info.late_resets,
                     "step {}: late resets",
                     k + 1
+                );
+                // The budget bounds the work: at most budget - 1 located events.
+                prop_assert!(
+                    (rep.events as usize) < budget,
+                    "step {}: {} events located with budget {budget}",
+                    k + 1,
+                    rep.events
                 );
                 for ev in &info.events {
                     st.events[match ev.kind {
@@ -351,6 +373,9 @@ fn run_case(case: &Case, law: FrictionLaw, steps: usize) -> Result<Stats, TestCa
         st.transitions += now.iter().zip(prev.iter()).filter(|(a, b)| a != b).count();
         prev = now;
     }
+    if budget < crane_model::MAX_SEGMENTS {
+        st.budgeted_late_resets = st.late_resets;
+    }
     st.cases_with_rejections = usize::from(st.rejected.iter().sum::<usize>() > 0);
     st.cases_with_end_stop = usize::from(st.events[1] > 0);
     st.cases_stuck_at_end = usize::from(last_rejected);
@@ -382,7 +407,8 @@ fn run_property(
 }
 
 /// Hybrid law: bit-exact agreement at every step (accepted and rejected), and in every case
-/// the automaton really switched modes. Half the cases run with random extensions.
+/// the automaton really switched modes. Half the cases run with random extensions, and a
+/// third with a random segment budget (`with_segment_budget(1..=8)`).
 #[test]
 fn hybrid_model_matches_reference_bit_for_bit() {
     let stats = run_property(HYBRID_CASES, |case| {
@@ -401,6 +427,13 @@ fn hybrid_model_matches_reference_bit_for_bit() {
         "share of cases with extensions {share}"
     );
     assert!(stats.events.iter().all(|&n| n > 0), "{stats:?}");
+    let budgeted = stats.budgeted as f64 / stats.cases as f64;
+    assert!(
+        (0.15..=0.4).contains(&budgeted),
+        "budgeted share {budgeted}"
+    );
+    // The budget really cut steps short: their events were reset late.
+    assert!(stats.budgeted_late_resets > 0, "{stats:?}");
     assert!(
         stats.cases_with_end_stop * 4 >= stats.cases,
         "end-stop impulses in too few cases: {stats:?}"
@@ -709,4 +742,45 @@ fn a_rejected_step_does_not_push_into_the_delay_line() {
         }
     }
     assert!(rejected > 200);
+}
+
+/// The segment budget is validated on both sides (a clear field name in the model's error),
+/// and budget 1 locates no event: a velocity zero inside the step is reset at its end.
+#[test]
+fn segment_budget_is_validated_and_bounds_location() {
+    let p = Params::default();
+    let q = [0.25, 0.3, 0.4, FRAC_PI_2, 0.0];
+    let (m, r) = pair(&p, 2e-3, FrictionLaw::Hybrid, q, [0.0; 5]);
+    for bad in [0, crane_model::MAX_SEGMENTS + 1] {
+        let e = m.clone().with_segment_budget(bad).expect_err("rejected");
+        assert_eq!(e.field, "config.segment_budget");
+        assert_eq!(e.value, bad as f64);
+        assert!(e.to_string().contains("config.segment_budget"), "{e}");
+        assert!(r.clone().with_segment_budget(bad).is_err());
+    }
+    assert_eq!(m.segment_budget(), crane_model::MAX_SEGMENTS);
+    // X moving at 5 cm/s against a reversed full input stops within a few steps.
+    let qd = [0.05, 0.0, 0.0, 0.0, 0.0];
+    let (m8, r8) = pair(&p, 2e-3, FrictionLaw::Hybrid, q, qd);
+    let (mut m1, mut r1) = (
+        m8.clone().with_segment_budget(1).expect("valid"),
+        r8.with_segment_budget(1).expect("valid"),
+    );
+    let mut m8 = m8;
+    let (mut late, mut located8) = (0, 0);
+    for k in 0..50 {
+        let u = [-12.0, 0.0, 0.0];
+        let a = m1.step(u).expect("step");
+        let b = r1.step(u).expect("step");
+        assert_eq!(a.events, 0, "budget 1 locates nothing");
+        assert!(b.events.is_empty());
+        assert_eq!(a.late_resets as usize, b.late_resets);
+        late += a.late_resets;
+        located8 += m8.step(u).expect("step").events;
+        if let Some(msg) = compare(k + 1, &m1, &r1) {
+            panic!("{msg}");
+        }
+    }
+    assert!(late > 0, "the stop was applied at a step end");
+    assert!(located8 > 0, "the default budget located it");
 }

@@ -19,8 +19,9 @@
 #[path = "../../twin/src/logic/mod.rs"]
 mod logic;
 
+use logic::control::{LoopConfig, F64_SEGMENT_BUDGET};
 use logic::fastmath::F32x;
-use logic::plant::{demo_plant, run_demo};
+use logic::plant::{demo_plant, run_demo, run_demo_with};
 use logic::scenarios::{run, SCENARIOS};
 use std::io::Read;
 use std::path::PathBuf;
@@ -36,7 +37,12 @@ fn host_digest() -> String {
         run::<F32x, _>(sc, "f32x", &mut out).expect("format");
     }
     let mut plant = demo_plant().expect("demo plant");
-    run_demo::<f64, _, _>(&mut plant, "f64", &mut out).expect("format");
+    // The firmware's f64 twin runs with its real-time segment budget.
+    let f64_loop = LoopConfig {
+        segment_budget: F64_SEGMENT_BUDGET,
+        ..LoopConfig::default()
+    };
+    run_demo_with::<f64, _, _>(&mut plant, &f64_loop, "f64", &mut out).expect("format");
     let mut plant = demo_plant().expect("demo plant");
     run_demo::<f32, _, _>(&mut plant, "f32", &mut out).expect("format");
     let mut plant = demo_plant().expect("demo plant");

@@ -2,7 +2,7 @@
 
 use crate::dynamics::{eval, Coeffs, Law};
 use crate::extensions::{deadband, DelayLine, Extensions};
-use crate::integrator::{step_hybrid, step_smooth, StepReport};
+use crate::integrator::{step_hybrid, step_smooth, StepReport, MAX_SEGMENTS};
 use crate::modes::Mode;
 use crate::params::{check, Error, Params, Problem};
 use crate::real::Real;
@@ -162,10 +162,25 @@ fn admit<R: Real>(c: &Coeffs<R>, init: &State<f64>) -> Result<(State<R>, [Mode; 
     ))
 }
 
-/// `sin(alpha) cos(beta) >= MIN_HANG` (see [`MIN_HANG`]).
+/// `sin(alpha) cos(beta) >= MIN_HANG` (see [`MIN_HANG`]) for a state.
 fn in_domain<R: Real>(s: &State<R>) -> bool {
-    let hang = s.q[3].sin() * s.q[4].cos();
-    hang >= R::from_f64(MIN_HANG)
+    hangs(s.q[3], s.q[4])
+}
+
+/// Whether swing angles `alpha`, `beta` [rad] are in the model's domain:
+/// `sin(alpha) cos(beta) >= MIN_HANG` (libm `sin`, `cos` in `R`; NaN gives `false`).
+///
+/// Inside the swing stops (`alpha` within `pi/2 +- SWING_STOP`, `|beta| <= SWING_STOP`) the
+/// product is at least `cos(1.4)^2 = 0.0289`, far above `MIN_HANG = 0.02` (and above any
+/// rounding of `sin`, `cos` in f64, f32 or `F32x`), so the answer there is `true` without
+/// the trigonometry: the same answer, at the cost of four comparisons.
+pub fn hangs<R: Real>(alpha: R, beta: R) -> bool {
+    let (a, b) = (alpha.to_f64(), beta.to_f64());
+    let (half_pi, stop) = (core::f64::consts::FRAC_PI_2, crate::integrator::SWING_STOP);
+    if a >= half_pi - stop && a <= half_pi + stop && b >= -stop && b <= stop {
+        return true;
+    }
+    alpha.sin() * beta.cos() >= R::from_f64(MIN_HANG)
 }
 
 impl From<Singular> for StepError {
@@ -210,6 +225,7 @@ pub struct Crane<R: Real = f64> {
     u_last: [R; 3],
     delay: DelayLine<R>,
     delay_steps: [usize; 3],
+    segments: usize,
 }
 
 impl<R: Real> Crane<R> {
@@ -242,6 +258,7 @@ impl<R: Real> Crane<R> {
             u_last: [R::ZERO; 3],
             delay: DelayLine::new(R::ZERO),
             delay_steps: [0; 3],
+            segments: MAX_SEGMENTS,
         })
     }
 
@@ -252,6 +269,41 @@ impl<R: Real> Crane<R> {
         self.delay_steps = ext.validate(self.h64)?;
         self.coeffs.extend(ext);
         Ok(self)
+    }
+
+    /// Sets the segment budget of a step: how many integration segments (one more than the
+    /// located events) one step may use, `1..=MAX_SEGMENTS` ([`MAX_SEGMENTS`] = 8 is the
+    /// default, and setting it again changes nothing, bit for bit). A real-time bound on the
+    /// work of a step: when the budget is used up, the last segment integrates to the step end
+    /// and the events it detects are applied there, unlocated (counted in
+    /// [`StepReport::late_resets`]; a breakaway is then released by the next step's
+    /// resolution). Budget 1 locates nothing and costs at most 12 evaluation-sized pieces of
+    /// work per step (NUMERICS.md "One step").
+    ///
+    /// Error `"config.segment_budget"` (`NotPositive` for 0, `TooLarge` above
+    /// [`MAX_SEGMENTS`]); the hybrid law only uses it.
+    pub fn with_segment_budget(mut self, segments: usize) -> Result<Self, Error> {
+        let problem = if segments == 0 {
+            Some(Problem::NotPositive)
+        } else if segments > MAX_SEGMENTS {
+            Some(Problem::TooLarge)
+        } else {
+            None
+        };
+        if let Some(problem) = problem {
+            return Err(Error {
+                field: "config.segment_budget",
+                problem,
+                value: segments as f64,
+            });
+        }
+        self.segments = segments;
+        Ok(self)
+    }
+
+    /// The segment budget of a step (see [`Crane::with_segment_budget`]).
+    pub fn segment_budget(&self) -> usize {
+        self.segments
     }
 
     /// Advances by one step `h` with input voltages `u = [u_x, u_y, u_l]` [V], held constant
@@ -285,7 +337,14 @@ impl<R: Real> Crane<R> {
             }
         }
         let (state, modes, report) = match self.law {
-            Law::Hybrid => step_hybrid(&self.coeffs, self.h, &self.state, &self.modes, &uc)?,
+            Law::Hybrid => step_hybrid(
+                &self.coeffs,
+                self.h,
+                &self.state,
+                &self.modes,
+                &uc,
+                self.segments,
+            )?,
             Law::Tanh(gamma) => {
                 let s = step_smooth(&self.coeffs, gamma, self.h, &self.state, &uc)?;
                 let modes = [0, 1, 2].map(|i| Mode::of_velocity(s.qd[i].to_f64()));

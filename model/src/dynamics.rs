@@ -220,18 +220,25 @@ fn mass_matrix<R: Real>(c: &Coeffs<R>, l: R, sa: R, ca: R, sb: R, cb: R) -> [[R;
     ]
 }
 
-/// Evaluates the accelerations, holding and friction forces at state `y`, in `modes`, with
-/// (already saturated) input voltages `u` [V].
-pub fn eval<R: Real>(
-    c: &Coeffs<R>,
-    law: Law<R>,
-    y: &State<R>,
-    modes: &[Mode; 3],
-    u: &[R; 3],
-) -> Result<Eval<R>, Singular> {
+/// The mode-independent part of an evaluation at one state, `M(q) qdd + h(q, qd) + G(q) = Q`:
+/// mass matrix, centrifugal and Coriolis terms, gravity. Computing it once lets the mode
+/// resolution try several mode sets at the same state without repeating the trigonometry
+/// (the same bits as [`eval`]), and gives tools (feedforward) the model's own terms.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AtState<R: Real> {
+    /// Mass matrix `M(q)` (symmetric; kg, kg m, kg m^2).
+    pub m: [[R; 5]; 5],
+    /// Centrifugal and Coriolis terms `h(q, qd)` [N, N, N, N m, N m].
+    pub hv: [R; 5],
+    /// Gravity terms `G(q)` [N, N, N, N m, N m] (0 for X and Y).
+    pub gv: [R; 5],
+}
+
+/// The mode-independent part of [`eval`] at state `y` (NUMERICS.md "One evaluation").
+pub fn at_state<R: Real>(c: &Coeffs<R>, y: &State<R>) -> AtState<R> {
     let [_, _, l, a, b] = y.q;
     let [_, _, ld, ad, bd] = y.qd;
-    let (sa, ca, sb, cb) = (a.sin(), a.cos(), b.sin(), b.cos());
+    let ((sa, ca), (sb, cb)) = (a.sin_cos(), b.sin_cos());
     let mp = c.mp;
     let mpl = mp * l;
     let ad2 = ad * ad;
@@ -257,6 +264,33 @@ pub fn eval<R: Real>(
         -(c.mpg * l * ca * cb),
         c.mpg * l * sa * sb,
     ];
+    AtState { m, hv, gv }
+}
+
+/// Evaluates the accelerations, holding and friction forces at state `y`, in `modes`, with
+/// (already saturated) input voltages `u` [V].
+pub fn eval<R: Real>(
+    c: &Coeffs<R>,
+    law: Law<R>,
+    y: &State<R>,
+    modes: &[Mode; 3],
+    u: &[R; 3],
+) -> Result<Eval<R>, Singular> {
+    eval_at(c, law, &at_state(c, y), y, modes, u)
+}
+
+/// [`eval`] with its mode-independent part `pre = at_state(c, y)` already computed.
+pub(crate) fn eval_at<R: Real>(
+    c: &Coeffs<R>,
+    law: Law<R>,
+    pre: &AtState<R>,
+    y: &State<R>,
+    modes: &[Mode; 3],
+    u: &[R; 3],
+) -> Result<Eval<R>, Singular> {
+    let [_, _, _, ad, bd] = y.qd;
+    let z = R::ZERO;
+    let (m, hv, gv) = (&pre.m, &pre.hv, &pre.gv);
 
     // Friction of the drive axes (0 for stopped axes: the constraint holds them).
     let mut f = [z; 3];
@@ -280,7 +314,7 @@ pub fn eval<R: Real>(
     }
 
     // Stopped axes: qdd_i = 0 exactly, by a unit row and column.
-    let mut am = m;
+    let mut am = *m;
     let mut stopped = [false; 3];
     if law == Law::Hybrid {
         for i in 0..3 {
@@ -328,7 +362,7 @@ pub(crate) fn end_stop_impulse<R: Real>(
     i: usize,
 ) -> Result<(), Singular> {
     let [_, _, l, a, b] = y.q;
-    let (sa, ca, sb, cb) = (a.sin(), a.cos(), b.sin(), b.cos());
+    let ((sa, ca), (sb, cb)) = (a.sin_cos(), b.sin_cos());
     let mut am = mass_matrix(c, l, sa, ca, sb, cb);
     let z = R::ZERO;
     let mut held = [false; 5];

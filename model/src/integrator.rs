@@ -13,17 +13,23 @@
 //! ([`end_stop_impulse`](crate::dynamics)): the payload keeps its velocity and the kinetic
 //! energy can only fall.
 //!
-//! Bounded work per step: at most [`MAX_SEGMENTS`] segments, each at most 10 evaluations of
-//! the dynamics (3 RK4 stages, 3 relocation stages, 4 in the mode resolution) and 3 end-stop
-//! solves, plus the initial resolution: 108 evaluation-sized pieces of work in the worst
-//! case, 4 evaluations in the usual step without event.
+//! Bounded work per step: at most `budget` segments ([`MAX_SEGMENTS`] by default; a smaller
+//! budget is set with [`Crane::with_segment_budget`](crate::Crane::with_segment_budget)).
+//! The last segment locates nothing: what it detects is reset at the step end (late resets).
+//! Worst case for budget `n`, counted in evaluations of the dynamics and end-stop solves
+//! (each about one evaluation's work): the initial resolution (4), per segment but the last
+//! one RK4 (3), relocation (3), at most 3 end-stop solves and a resolution (4), then the last
+//! segment's RK4 (3) and the step end (at most 3 + 2 end-stop solves: each drive axis is
+//! stopped at most once by the two late sweeps, and two swing stops): `13 (n - 1) + 12`
+//! pieces, 103 for the default 8 and 12 for budget 1; the usual step without event costs 4 evaluations whatever the budget.
 
 use crate::dynamics::{end_stop_impulse, eval, Coeffs, Eval, Law, Singular};
 use crate::modes::{candidate, margin, resolve, Mode};
 use crate::real::Real;
 use crate::state::State;
 
-/// Maximum number of integration segments (events + 1) in one step.
+/// Maximum number of integration segments (events + 1) in one step, and the default segment
+/// budget ([`Crane::with_segment_budget`](crate::Crane::with_segment_budget) lowers it).
 pub const MAX_SEGMENTS: usize = 8;
 /// Bisection iterations when locating a velocity or limit event (resolution `h / 2^30`).
 pub const BISECTION_ITERATIONS: usize = 30;
@@ -198,7 +204,8 @@ pub struct StepReport {
     /// Events located inside the step (velocity zero, limit, breakaway).
     pub events: u8,
     /// Resets applied at the end of the step without location, because the step ran out of
-    /// segments ([`MAX_SEGMENTS`]). Normally 0.
+    /// segments (its segment budget, [`MAX_SEGMENTS`] by default). Normally 0 with the
+    /// default budget.
     pub late_resets: u8,
     /// Swing angles stopped at [`SWING_STOP`] at the end of the step. Normally 0.
     pub swing_stops: u8,
@@ -245,7 +252,8 @@ fn swing_stops<R: Real>(
     Ok(n)
 }
 
-/// Advances the hybrid automaton by `h` with held input `u` (already saturated).
+/// Advances the hybrid automaton by `h` with held input `u` (already saturated), in at most
+/// `budget` segments (`1..=MAX_SEGMENTS`; values outside are clamped into that range).
 /// On error nothing is written back: the caller keeps the old state.
 pub(crate) fn step_hybrid<R: Real>(
     c: &Coeffs<R>,
@@ -253,16 +261,24 @@ pub(crate) fn step_hybrid<R: Real>(
     y0: &State<R>,
     modes0: &[Mode; 3],
     u: &[R; 3],
+    budget: usize,
 ) -> Result<(State<R>, [Mode; 3], StepReport), Singular> {
+    let budget = budget.clamp(1, MAX_SEGMENTS);
     let law = Law::Hybrid;
     let mut y = *y0;
     let mut modes = *modes0;
     let mut report = StepReport::default();
     let mut done = R::ZERO;
     let mut e1 = resolve(c, law, &y, u, &mut modes)?;
-    for seg in 0..MAX_SEGMENTS {
+    for seg in 0..budget {
         let tau = h - done;
         let (yn, e4) = rk4(c, law, &y, u, &modes, &e1, tau)?;
+        if seg + 1 == budget {
+            // The last segment locates nothing (so it does not search either): whatever it
+            // crossed is reset at the step end by the late sweep.
+            y = yn;
+            break;
+        }
         // Earliest event in this segment, as a fraction of tau.
         let mut first: Option<(R, usize, Kind)> = None;
         let mut consider = |th: R, i: usize, k: Kind| {
@@ -310,10 +326,6 @@ pub(crate) fn step_hybrid<R: Real>(
             y = yn;
             break;
         };
-        if seg == MAX_SEGMENTS - 1 {
-            y = yn;
-            break;
-        }
         let s = th * tau;
         let (ye, _) = rk4(c, law, &y, u, &modes, &e1, s)?;
         y = ye;

@@ -37,7 +37,7 @@ pub mod real;
 pub mod solve;
 pub mod state;
 
-pub use crane::{Config, Crane, FrictionLaw, Output, StepError, MIN_HANG, U_MAX};
+pub use crane::{hangs, Config, Crane, FrictionLaw, Output, StepError, MIN_HANG, U_MAX};
 pub use dynamics::{Coeffs, Eval, Law};
 pub use extensions::{Axis, Bump, Direction, Extensions, Stiction, MAX_BUMPS, MAX_DELAY_STEPS};
 pub use integrator::{StepReport, MAX_SEGMENTS, SWING_STOP};

@@ -40,6 +40,13 @@ pub trait Real:
     fn sin(self) -> Self;
     /// Cosine (radians), from `libm`.
     fn cos(self) -> Self;
+    /// Sine and cosine of one angle (radians): the same bits as `(self.sin(), self.cos())`,
+    /// cheaper where the library shares the argument reduction (`libm::sincos` for `f64`;
+    /// the identity is checked in `host-tests/tests/sincos.rs`).
+    #[inline]
+    fn sin_cos(self) -> (Self, Self) {
+        (self.sin(), self.cos())
+    }
     /// Hyperbolic tangent, from `libm`.
     fn tanh(self) -> Self;
     /// Exponential, from `libm`.
@@ -70,6 +77,10 @@ impl Real for f64 {
     #[inline]
     fn cos(self) -> Self {
         libm::cos(self)
+    }
+    #[inline]
+    fn sin_cos(self) -> (Self, Self) {
+        libm::sincos(self)
     }
     #[inline]
     fn tanh(self) -> Self {

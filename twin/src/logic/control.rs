@@ -6,7 +6,7 @@
 use super::feedforward::{saturate, voltages, Reference};
 use super::io::EncoderScale;
 use super::observer::{Gains, Observer, Rejected, Update};
-use crane_model::{Error, Mode, Params, Real, State};
+use crane_model::{Error, Mode, Params, Real, State, MAX_SEGMENTS};
 
 /// A failed hardware access.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -50,7 +50,20 @@ pub struct LoopConfig {
     pub gains: Gains,
     /// Encoder scale.
     pub scale: EncoderScale,
+    /// Segment budget of the twin's step (`1..=MAX_SEGMENTS`, see
+    /// `Crane::with_segment_budget`): bounds the work of one period. Default
+    /// [`MAX_SEGMENTS`] (every event located); the f64 firmware uses
+    /// [`F64_SEGMENT_BUDGET`].
+    pub segment_budget: usize,
 }
+
+/// Segment budget of the f64 (soft-float) twin on the Cortex-M4F, chosen from the measured
+/// cost of a period (firmware/README.md "Measured cost"): every additional segment costs an
+/// RK4 over the rest of the step, a relocation and a resolution, about 7 evaluations of the
+/// dynamics (~150,000 instructions in soft float), more than the headroom of a 2 ms period
+/// at 168 MHz. With 1 the twin locates no event inside a period: stops and end-stop hits are
+/// applied at the period's end, breakaways at the next period's start.
+pub const F64_SEGMENT_BUDGET: usize = 1;
 
 impl Default for LoopConfig {
     fn default() -> Self {
@@ -62,6 +75,7 @@ impl Default for LoopConfig {
             use_disturbance: true,
             gains: Gains::default(),
             scale: EncoderScale::RIG,
+            segment_budget: MAX_SEGMENTS,
         }
     }
 }
@@ -88,10 +102,12 @@ pub struct Controller<R: Real> {
 }
 
 impl<R: Real> Controller<R> {
-    /// A controller whose twin has parameters `params` and starts at `init`.
+    /// A controller whose twin has parameters `params` and starts at `init`. Errors name the
+    /// field (parameters, `"state.q[3]"`, `"config.segment_budget"`...).
     pub fn new(params: &Params, init: State<f64>, cfg: &LoopConfig) -> Result<Self, Error> {
         Ok(Controller {
-            observer: Observer::new(params, cfg.period, init, &cfg.gains)?,
+            observer: Observer::new(params, cfg.period, init, &cfg.gains)?
+                .with_segment_budget(cfg.segment_budget)?,
             applied: [R::ZERO; 3],
             kp: cfg.kp.map(R::from_f64),
             kd: cfg.kd.map(R::from_f64),

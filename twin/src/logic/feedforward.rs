@@ -1,10 +1,13 @@
 //! Friction-aware feedforward: the voltages the model says a reference motion of the trolley
 //! (X, Y) and the rope needs.
 //!
-//! `F = M_red(q) a_ref + F_0(q, qd) + f(q_ref, v_ref)` per drive axis, `u = (F - d) / K`,
-//! saturated to +-12 V, where
-//! - `F_0` is the force that holds the drive axes still against the swing, Coriolis and gravity
-//!   terms (the model's holding force with all three drive axes stopped, negated);
+//! `F = M_red(q) a_ref + F_0(q, qd) + f(q_ref, v_ref)` per drive axis, `u = (F - d - b) / K`
+//! (`b` the model's bias force, if on), saturated to +-12 V, where
+//! - `F_0 = M_ds qdd_s + h_d + G_d` is the force that holds the drive axes still against the
+//!   swing, Coriolis and gravity terms: the model's own terms at the state
+//!   ([`dynamics::at_state`]), with the swing accelerations `qdd_s = M_ss^-1 (Q_s - h_s - G_s)`
+//!   of the held drive axes (the model's holding force with all three drive axes stopped,
+//!   without a full evaluation);
 //! - `M_red` is the drive-axis mass matrix with the swing accelerations eliminated
 //!   (`M_dd - M_ds M_ss^-1 M_sd`; `M_ss` is diagonal);
 //! - `f` is the model's friction at the reference: `Dbar+ v + Cbar+(p)` or `Dbar- v - Cbar-(p)`
@@ -14,7 +17,7 @@
 //! - `d` is the observer's disturbance estimate (the friction the model gets wrong).
 
 use crane_model::friction::{breakaway, dry_at};
-use crane_model::{dynamics, Coeffs, Law, Mode, Real, State};
+use crane_model::{dynamics, Coeffs, Mode, Real, State};
 
 /// Reference of the drive axes X, Y, L: position [m], velocity [m/s], acceleration [m/s^2].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -64,28 +67,27 @@ pub fn voltages<R: Real>(
         y.qd[i] = r.vel[i];
     }
     let zero = [R::ZERO; 3];
-    let Ok(e) = dynamics::eval(c, Law::Hybrid, &y, &[Mode::Stopped; 3], &zero) else {
+    // The model's terms at the reference (drive axes) and the twin's swing state.
+    let pre = dynamics::at_state(c, &y);
+    let m = &pre.m;
+    let (m33, m44) = (m[3][3], m[4][4]);
+    if !(m33 > R::ZERO && m44 > R::ZERO) {
         return zero;
-    };
-    let (sa, ca) = (y.q[3].sin(), y.q[3].cos());
-    let (sb, cb) = (y.q[4].sin(), y.q[4].cos());
-    let mp = c.mp;
-    let m02 = mp * sa * sb;
-    let m12 = mp * ca;
-    let mdd = [
-        [c.m00, R::ZERO, m02],
-        [R::ZERO, c.m11, m12],
-        [m02, m12, c.m22],
-    ];
-    let c3 = [ca * sb, -sa, R::ZERO];
-    let c4 = [cb, R::ZERO, R::ZERO];
+    }
+    // Swing accelerations with the drive axes held (M_ss is diagonal).
+    let qdd3 = (-(c.damp_alpha * y.qd[3]) - pre.hv[3] - pre.gv[3]) / m33;
+    let qdd4 = (-(c.damp_beta * y.qd[4]) - pre.hv[4] - pre.gv[4]) / m44;
+    let k3 = [m[0][3] / m33, m[1][3] / m33, m[2][3] / m33];
+    let k4 = [m[0][4] / m44, m[1][4] / m44, m[2][4] / m44];
     let one = R::ONE;
     let mut u = [R::ZERO; 3];
     for i in 0..3 {
-        let mut f = -e.hold[i];
-        for j in 0..3 {
-            let mred = mdd[i][j] - mp * (c3[i] * c3[j] + c4[i] * c4[j]);
-            f = f + mred * r.acc[j];
+        // F_0: the force holding the drive axis against swing, Coriolis and gravity terms.
+        let mut f = m[i][3] * qdd3 + m[i][4] * qdd4 + pre.hv[i] + pre.gv[i];
+        for (j, (row, acc)) in m.iter().zip(r.acc).enumerate() {
+            // M_red = M_dd - M_ds M_ss^-1 M_sd.
+            let mred = m[i][j] - (k3[i] * row[3] + k4[i] * row[4]);
+            f = f + mred * acc;
         }
         let ax = &c.axes[i];
         let (p, v, a) = (r.pos[i], r.vel[i], r.acc[i]);

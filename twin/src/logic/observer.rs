@@ -16,7 +16,7 @@
 //! measurement is not used (the twin runs open loop for that period). The twin's state stays
 //! finite in every case: the model itself rejects steps that would leave it non-finite.
 
-use crane_model::{Config, Crane, Error, Mode, Params, Real, State, StepError, MIN_HANG};
+use crane_model::{hangs, Config, Crane, Error, Mode, Params, Real, State, StepError};
 
 /// Observer gains (in `f64`; converted once to the twin's scalar type).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -113,8 +113,6 @@ pub struct Update<R: Real> {
 /// The twin with its observer.
 #[derive(Clone, Debug)]
 pub struct Observer<R: Real> {
-    params: Params,
-    config: Config,
     twin: Crane<R>,
     g_alpha: R,
     g_beta: R,
@@ -172,8 +170,6 @@ impl<R: Real> Observer<R> {
         let axes = params.axes();
         let d = |i: usize| R::from_f64(m[i] * 2.0 * gains.gamma / (t * t));
         Ok(Observer {
-            params: *params,
-            config,
             twin,
             g_alpha: R::from_f64(gains.alpha),
             g_beta: R::from_f64(gains.beta / t),
@@ -193,6 +189,14 @@ impl<R: Real> Observer<R> {
             mean_sq: [R::ZERO; 5],
             counters: Counters::default(),
         })
+    }
+
+    /// Sets the twin's segment budget ([`Crane::with_segment_budget`]: at most `segments`
+    /// integration segments per period, events beyond it applied at the period's end), a
+    /// bound on the work of one update. Errors name `"config.segment_budget"`.
+    pub fn with_segment_budget(mut self, segments: usize) -> Result<Self, Error> {
+        self.twin = self.twin.with_segment_budget(segments)?;
+        Ok(self)
     }
 
     /// One period: predict with the voltages `u` [V] applied during the period that just
@@ -237,8 +241,7 @@ impl<R: Real> Observer<R> {
         }
         let a = q[3] + self.s_alpha * r[3];
         let b = q[4] + self.s_alpha * r[4];
-        let hang = a.sin() * b.cos();
-        if hang >= R::from_f64(MIN_HANG) {
+        if hangs(a, b) {
             q[3] = a;
             q[4] = b;
             qd[3] = qd[3] + self.s_beta * r[3];
@@ -250,9 +253,9 @@ impl<R: Real> Observer<R> {
             q: q.map(R::to_f64),
             qd: qd.map(R::to_f64),
         };
-        match Crane::<R>::new(&self.params, self.config, corrected) {
-            Ok(c) => self.twin = c,
-            Err(_) => self.counters.correction_errors += 1,
+        // Same checks and mode rules as `Crane::new`; keeps extensions and the segment budget.
+        if self.twin.set_state(corrected).is_err() {
+            self.counters.correction_errors += 1;
         }
         for (ms, ri) in self.mean_sq.iter_mut().zip(r) {
             *ms = *ms + self.lambda * (ri * ri - *ms);

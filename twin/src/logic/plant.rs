@@ -293,7 +293,17 @@ pub fn run_demo<R: Real, I: Io, W: Write>(
     tag: &str,
     out: &mut W,
 ) -> Result<Option<LoopSummary>, core::fmt::Error> {
-    let cfg = LoopConfig::default();
+    run_demo_with::<R, I, W>(io, &LoopConfig::default(), tag, out)
+}
+
+/// [`run_demo`] with loop settings `cfg` (e.g. a segment budget).
+pub fn run_demo_with<R: Real, I: Io, W: Write>(
+    io: &mut I,
+    cfg: &LoopConfig,
+    tag: &str,
+    out: &mut W,
+) -> Result<Option<LoopSummary>, core::fmt::Error> {
+    let cfg = *cfg;
     let Ok(mut ctrl) = Controller::<R>::new(&Params::default(), demo_twin_init(), &cfg) else {
         writeln!(out, "ERROR {tag} controller")?;
         return Ok(None);
