@@ -466,6 +466,7 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
             100.0 * (f.0.sse_h / fnorm_h).sqrt(),
         );
     }
+    closed_loop_measures(ds, &runs, &split, &mut measures);
     measures.insert("published_direction_dependent_fit_pct".into(), 3.11);
     measures.insert("published_sim_force_err_estimation_pct".into(), 5.85);
     measures.insert("published_sim_force_err_validation_pct".into(), 8.94);
@@ -503,4 +504,60 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
         candidates,
         measures,
     })
+}
+
+/// Closed-loop force errors (the EMPS benchmark's simulation measure), when the runs are EMPS
+/// recordings (columns `t, qm, qg, vir`, optionally `pulses_N`) split into one fitting run and
+/// held-out runs: the symmetric and the direction-dependent IDIM-LS models, fitted on the
+/// fitting run only, simulated in closed loop with the rig's controller
+/// ([`crane_ident::emps::Controller::default`]) on each run's reference; relative force error
+/// `100 ||F - F_sim|| / ||F||` [%], held-out runs pooled by their mean.
+fn closed_loop_measures(
+    ds: &Dataset,
+    runs: &[&crane_ident::data::Run],
+    split: &[Option<bool>],
+    measures: &mut BTreeMap<String, f64>,
+) {
+    use crane_ident::emps::{
+        idim_ls, load_closed_loop, simulate_closed_loop, AxisModel, Controller, IdimModel,
+    };
+    let fit: Vec<usize> = (0..runs.len())
+        .filter(|&i| split[i] == Some(false))
+        .collect();
+    let held: Vec<usize> = (0..runs.len())
+        .filter(|&i| split[i] == Some(true))
+        .collect();
+    if fit.len() != 1 || held.is_empty() {
+        return;
+    }
+    let Some(fit_run) = runs[fit[0]].axis() else {
+        return;
+    };
+    let Ok(cl) = runs
+        .iter()
+        .map(|r| load_closed_loop(&ds.dir.join(&r.name)))
+        .collect::<Result<Vec<_>, _>>()
+    else {
+        return;
+    };
+    let ctl = Controller::default();
+    for (model, name) in [
+        (IdimModel::Symmetric, "symmetric"),
+        (IdimModel::DirectionDependent, "direction_dependent"),
+    ] {
+        let Ok(f) = idim_ls(fit_run, model, &IdimOptions::default()) else {
+            continue;
+        };
+        let Some(m) = AxisModel::from_idim(model, &f.theta) else {
+            continue;
+        };
+        let e_fit = simulate_closed_loop(&cl[fit[0]], &m, &ctl).force_err_pct;
+        let e_held = held
+            .iter()
+            .map(|&i| simulate_closed_loop(&cl[i], &m, &ctl).force_err_pct)
+            .sum::<f64>()
+            / held.len() as f64;
+        measures.insert(format!("closed_loop_force_err_fit_{name}_pct"), e_fit);
+        measures.insert(format!("closed_loop_force_err_held_out_{name}_pct"), e_held);
+    }
 }
