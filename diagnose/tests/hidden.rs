@@ -148,9 +148,10 @@ fn hidden_effect_sweep() {
     }
     // Asserted: what the sweep measured (seeds 100..140, deterministic):
     //   right cause, axis and centre/delay: 100 % for none, direction_asymmetry, force_offset,
-    //   input_deadzone, input_delay, payload_mass; localized_friction 97.5 %; stiction 92.5 %.
+    //   input_deadzone, input_delay, payload_mass; localized_friction 97.5 %; stiction 95 %.
     //   Held-out NMAE of the affected axis cut whenever the effect moved it beyond noise:
     //   100 % except localized_friction 97.5 % and stiction 92.5 % (the misses).
+    //   Time: 134 s in the test profile (opt-level 2) on the shared 2-core machine.
     if n == 40 && only.is_none() {
         let floor = [
             ("none", 100.0, 100.0),
@@ -160,7 +161,7 @@ fn hidden_effect_sweep() {
             ("input_delay", 100.0, 100.0),
             ("payload_mass", 100.0, 100.0),
             ("localized_friction", 97.5, 97.5),
-            ("stiction", 92.5, 92.5),
+            ("stiction", 95.0, 92.5),
         ];
         for (cause, min, cut) in floor {
             let (c, a, d, k) = rates[cause];
