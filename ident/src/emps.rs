@@ -163,6 +163,8 @@ pub struct Controller {
     pub sat_v: f64,
     /// Drive gain `gtau` [N/V].
     pub gtau: f64,
+    /// Samples between the controller's output and the drive (the README's rig: 1).
+    pub delay_samples: usize,
 }
 
 impl Default for Controller {
@@ -173,6 +175,7 @@ impl Default for Controller {
             kv: 243.45,
             sat_v: 10.0,
             gtau: 35.150651882485,
+            delay_samples: 1,
         }
     }
 }
@@ -295,7 +298,6 @@ pub fn simulate_closed_loop(
     let mut qs = Vec::with_capacity(n);
     let mut virs = Vec::with_capacity(n);
     let (mut q_prev, mut qf_prev) = (q, q);
-    let mut applied = 0.0; // command reaching the drive during this sample
     for k in 0..n {
         let qf = 0.5 * q + 0.5 * q_prev;
         let qdot = if k == 0 { 0.0 } else { (qf - qf_prev) / dt };
@@ -304,6 +306,8 @@ pub fn simulate_closed_loop(
             + run.pulses_v[k];
         qs.push(q);
         virs.push(nu);
+        // command reaching the drive during this sample (zero before the first output)
+        let applied = k.checked_sub(ctl.delay_samples).map_or(0.0, |j| virs[j]);
         let f = ctl.gtau * applied - model.offset;
         for _ in 0..SUBSTEPS {
             if v == 0.0 {
@@ -333,7 +337,6 @@ pub fn simulate_closed_loop(
         }
         q_prev = qs[k];
         qf_prev = qf;
-        applied = nu;
     }
     let rel = |y: &[f64], yh: &[f64]| -> f64 {
         let (mut e, mut s) = (0.0, 0.0);
