@@ -148,10 +148,11 @@ fn hidden_effect_sweep() {
     }
     // Asserted: what the sweep measured (seeds 100..140, deterministic):
     //   right cause, axis and centre/delay: 100 % for none, direction_asymmetry, force_offset,
-    //   input_deadzone, input_delay, payload_mass; localized_friction 97.5 %; stiction 95 %.
+    //   input_deadzone, input_delay, payload_mass; 97.5 % for localized_friction and stiction.
     //   Held-out NMAE of the affected axis cut whenever the effect moved it beyond noise:
-    //   100 % except localized_friction 97.5 % and stiction 92.5 % (the misses).
-    //   Time: 134 s in the test profile (opt-level 2) on the shared 2-core machine.
+    //   100 % except localized_friction and stiction 97.5 % (their one miss each, seed 135:
+    //   the fitting run barely excites the rope effect that the held-out run shows).
+    //   Time: 211 s in the test profile (opt-level 2) on the shared 2-core machine.
     if n == 40 && only.is_none() {
         let floor = [
             ("none", 100.0, 100.0),
@@ -161,7 +162,7 @@ fn hidden_effect_sweep() {
             ("input_delay", 100.0, 100.0),
             ("payload_mass", 100.0, 100.0),
             ("localized_friction", 97.5, 97.5),
-            ("stiction", 95.0, 92.5),
+            ("stiction", 97.5, 97.5),
         ];
         for (cause, min, cut) in floor {
             let (c, a, d, k) = rates[cause];
