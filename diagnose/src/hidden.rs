@@ -108,8 +108,15 @@ pub fn draw(cause: &str, seed: u64) -> Hidden {
     Hidden { axis, ext }
 }
 
+/// Centring feedback gains of the generated runs (X, Y, rope) [V/m].
+pub const GAIN: [f64; 3] = [15.0, 15.0, 40.0];
+/// Amplitude of the reference sweep of the generated runs (X, Y, rope) [m]: with the
+/// feedback's lag the drives then cross the whole stretch where a hidden bump may sit.
+pub const SWEEP_M: [f64; 3] = [0.15, 0.15, 0.08];
+
 /// Records `runs` runs of `seconds` each on the virtual rig with the hidden effect: steps of
-/// random level and duration on every drive, with a weak centring feedback.
+/// random level and duration on every drive, with a weak feedback towards a reference that
+/// sweeps each drive's stretch once per run.
 pub fn dataset(hidden: &Hidden, seed: u64, runs: usize, seconds: f64) -> Result<Dataset, String> {
     let cfg = PlantConfig {
         seed,
@@ -128,10 +135,17 @@ pub fn dataset(hidden: &Hidden, seed: u64, runs: usize, seconds: f64) -> Result<
                 signals::multistep(&mut rng, n, dt, a, lv, (0.3, 1.0))
             })
             .collect();
-        let signal: Vec<[f64; 3]> = (0..n)
-            .map(|k| [parts[0][k][0], parts[1][k][1], parts[2][k][2]])
-            .collect();
         let center = [0.25, 0.30, 0.35];
+        // the reference sweeps the stretch where effects may sit, once per run and in both
+        // directions (the feedback towards a moving reference `center + sweep(t)` is the
+        // fixed-centre feedback plus `gain * sweep(t)`, added to the signal)
+        let phase = rng.range(0.0, std::f64::consts::TAU);
+        let signal: Vec<[f64; 3]> = (0..n)
+            .map(|k| {
+                let w = (std::f64::consts::TAU * k as f64 / n as f64 + phase).sin();
+                std::array::from_fn(|a| parts[a][k][a] + GAIN[a] * SWEEP_M[a] * w)
+            })
+            .collect();
         let exp = Experiment {
             name: format!("run{r}"),
             kind: RunKind::Other,
@@ -146,7 +160,7 @@ pub fn dataset(hidden: &Hidden, seed: u64, runs: usize, seconds: f64) -> Result<
             input: Input::Centred {
                 signal,
                 center,
-                gain: [15.0, 15.0, 40.0],
+                gain: GAIN,
             },
         };
         let rec = rig.run(&exp).map_err(|e| e.to_string())?;

@@ -70,7 +70,8 @@ fn scatter(x: &[f64], ys: &[(&[f64], &str)], title: &str) -> String {
     s
 }
 
-/// Writes `<name>_vs_{time,position,velocity}.svg` per series.
+/// Writes `<name>_vs_{time,position,velocity}.svg` per series (crane axes, or the single-axis
+/// closed-loop force residuals).
 pub fn crane_plots(dir: &Path, series: &[Series]) -> Result<(), DiagnoseError> {
     std::fs::create_dir_all(dir).map_err(|e| DiagnoseError::Io(e.to_string()))?;
     for s in series {

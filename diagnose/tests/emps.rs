@@ -65,6 +65,17 @@ fn emps_symmetric_model_misses_the_direction_dependence() {
         "{m:?}"
     );
     assert!(f.nmae_after < f.nmae_before);
+    // the published measure: closed-loop simulated force error, estimation / validation
+    let cl = |k: &str| m[&format!("closed_loop_force_err_{k}_pct")];
+    eprintln!(
+        "closed loop: symmetric {:.2} / {:.2} %, direction-dependent {:.2} / {:.2} % (published symmetric 5.85 / 8.94 %)",
+        cl("fit_symmetric"),
+        cl("held_out_symmetric"),
+        cl("fit_direction_dependent"),
+        cl("held_out_direction_dependent")
+    );
+    assert!(cl("held_out_direction_dependent") < cl("held_out_symmetric"));
+    assert!(cl("fit_direction_dependent") < cl("fit_symmetric"));
 }
 
 #[test]
@@ -86,4 +97,27 @@ fn emps_paper_structure_then_finds_the_one_sample_command_delay() {
         .candidates
         .iter()
         .any(|c| c.cause == "force_offset" && !c.supported));
+}
+
+#[test]
+fn emps_closed_loop_plots_are_written() {
+    let dir = std::env::temp_dir().join(format!("crane-diagnose-emps-{}", std::process::id()));
+    let o = DiagnoseOptions {
+        baseline: Baseline::Symmetric,
+        plots_dir: Some(dir.clone()),
+    };
+    diagnose_dataset(&emps(), &o).unwrap();
+    for part in ["fit_0", "held_out_1"] {
+        for tag in ["time", "position", "velocity"] {
+            let f = dir.join(format!("closed_loop_force_{part}_vs_{tag}.svg"));
+            let text = std::fs::read_to_string(&f).unwrap_or_default();
+            // both models drawn: red (symmetric) and blue (direction-dependent)
+            assert!(
+                text.contains("fill=\"red\"") && text.contains("fill=\"blue\""),
+                "{}",
+                f.display()
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

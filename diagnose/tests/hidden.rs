@@ -116,7 +116,14 @@ fn hidden_effect_sweep() {
         .unwrap_or(40);
     let mut lines = Vec::new();
     let mut rates = std::collections::BTreeMap::new();
+    let only = std::env::var("SWEEP_CAUSES").ok();
     for cause in std::iter::once("none").chain(CAUSES) {
+        if only
+            .as_ref()
+            .is_some_and(|o| !o.split(',').any(|c| c == cause))
+        {
+            continue;
+        }
         let (mut c, mut a, mut d, mut k) = (0, 0, 0, 0);
         for seed in 100..100 + n {
             let (h, r) = case(cause, seed);
@@ -126,7 +133,7 @@ fn hidden_effect_sweep() {
             d += (o.cause && o.detail) as u32;
             k += o.cut as u32;
             if !(o.cause && o.axis && o.detail && o.cut) {
-                eprintln!("miss: {}", show(&h, &r));
+                eprintln!("miss: seed {seed} {}", show(&h, &r));
             }
         }
         let p = |x: u32| 100.0 * x as f64 / n as f64;
@@ -139,40 +146,31 @@ fn hidden_effect_sweep() {
     for l in &lines {
         eprintln!("{l}");
     }
-    // Asserted: what the sweep measured (seeds 100..140, deterministic). The targets
-    // (right cause first >= 95 %) are met for none, direction_asymmetry, force_offset,
-    // input_delay and payload_mass; not yet for localized_friction (80 %), input_deadzone
-    // (82.5 %) and stiction (67.5 %).
-    if n == 40 {
+    // Asserted: what the sweep measured (seeds 100..140, deterministic):
+    //   right cause, axis and centre/delay: 100 % for none, direction_asymmetry, force_offset,
+    //   input_deadzone, input_delay, payload_mass; 97.5 % for localized_friction and stiction.
+    //   Held-out NMAE of the affected axis cut whenever the effect moved it beyond noise:
+    //   100 % except localized_friction and stiction 97.5 % (their one miss each, seed 135,
+    //   a rope effect the fitting run shows much less of than the held-out run: baseline
+    //   rope NMAE fitting / held-out 0.004 / 1.0 % for the bump, 0.25 / 1.96 % for stiction).
+    //   Time: 211 s in the test profile (opt-level 2) on the shared 2-core machine.
+    if n == 40 && only.is_none() {
         let floor = [
-            ("none", 95.0),
-            ("direction_asymmetry", 95.0),
-            ("force_offset", 95.0),
-            ("input_delay", 95.0),
-            ("payload_mass", 95.0),
-            ("localized_friction", 80.0),
-            ("input_deadzone", 82.5),
-            ("stiction", 67.5),
+            ("none", 100.0, 100.0),
+            ("direction_asymmetry", 100.0, 100.0),
+            ("force_offset", 100.0, 100.0),
+            ("input_deadzone", 100.0, 100.0),
+            ("input_delay", 100.0, 100.0),
+            ("payload_mass", 100.0, 100.0),
+            ("localized_friction", 97.5, 97.5),
+            ("stiction", 97.5, 97.5),
         ];
-        for (cause, min) in floor {
-            let (c, a, d, _) = rates[cause];
+        for (cause, min, cut) in floor {
+            let (c, a, d, k) = rates[cause];
             assert!(
-                c >= min && a >= min && d >= min,
+                c >= min && a >= min && d >= min && k >= cut,
                 "{cause}: {:?}",
                 rates[cause]
-            );
-        }
-        for cause in [
-            "none",
-            "direction_asymmetry",
-            "force_offset",
-            "input_deadzone",
-            "input_delay",
-            "payload_mass",
-        ] {
-            assert!(
-                rates[cause].3 >= 100.0,
-                "{cause}: NMAE not cut in every moved case"
             );
         }
     }
@@ -186,6 +184,54 @@ fn explore() {
             let t0 = Instant::now();
             let (h, r) = case(cause, seed);
             eprintln!("{:.2}s {}", t0.elapsed().as_secs_f64(), show(&h, &r));
+        }
+    }
+}
+
+/// One case with every candidate: `CASE=cause:seed cargo test ... -- --ignored one_case`.
+#[test]
+#[ignore = "exploration print-out"]
+fn one_case() {
+    let spec = std::env::var("CASE").unwrap_or_else(|_| "stiction:100".into());
+    let (cause, seed) = spec.split_once(':').expect("CASE=cause:seed");
+    let t0 = Instant::now();
+    let (h, r) = case(cause, seed.parse().expect("seed"));
+    eprintln!("{:.2}s {}", t0.elapsed().as_secs_f64(), show(&h, &r));
+    for c in &r.candidates {
+        eprintln!(
+            "  {:20} {} score {:8.4} fbic {:10.1} {} {:?}",
+            c.cause, c.axis, c.score, c.force_delta_bic, c.supported, c.parameters
+        );
+    }
+    for e in &r.baseline_errors {
+        eprintln!("  {e:?}");
+    }
+}
+
+/// Position coverage of the generated runs.
+#[test]
+#[ignore = "exploration print-out"]
+fn coverage() {
+    use crane_ident::data::Samples;
+    for seed in 100..106u64 {
+        let h = draw("none", seed);
+        let ds = dataset(&h, seed, 2, SECONDS).expect("rig runs");
+        for r in &ds.runs {
+            if let Samples::Crane(c) = &r.samples {
+                let mm = |x: &[f64]| {
+                    (
+                        x.iter().cloned().fold(f64::INFINITY, f64::min),
+                        x.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
+                    )
+                };
+                eprintln!(
+                    "{seed} {} x {:?} y {:?} l {:?}",
+                    r.name,
+                    mm(&c.x),
+                    mm(&c.y),
+                    mm(&c.l)
+                );
+            }
         }
     }
 }

@@ -148,3 +148,208 @@ pub fn cross_test(run: &AxisRun, model: IdimModel, theta: &[f64], opt: &IdimOpti
     }
     100.0 * (ss / yy).sqrt()
 }
+
+/// The EMPS rig's position controller and drive (`shared/data/emps/README.md`):
+/// `nu = kp kv (qr - q) - kv qdot` with `qdot(k) = (qf(k) - qf(k-1)) / dt`,
+/// `qf(k) = (q(k) + q(k-1)) / 2`, saturated to `±sat_v`; the command reaches the drive one
+/// sample later; force on the load side `gtau * vir` [N].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Controller {
+    /// Position gain `kp` [1/s].
+    pub kp: f64,
+    /// Velocity gain `kv` [V/(m/s)].
+    pub kv: f64,
+    /// Saturation of the command [V].
+    pub sat_v: f64,
+    /// Drive gain `gtau` [N/V].
+    pub gtau: f64,
+    /// Samples between the controller's output and the drive (the README's rig: 1).
+    pub delay_samples: usize,
+}
+
+impl Default for Controller {
+    /// The benchmark's values.
+    fn default() -> Self {
+        Controller {
+            kp: 160.18,
+            kv: 243.45,
+            sat_v: 10.0,
+            gtau: 35.150651882485,
+            delay_samples: 1,
+        }
+    }
+}
+
+/// A single-axis model to simulate in closed loop: `M qdd = gtau vir - f(qd) - offset`, with
+/// `f = Fv+ qd + Fc+` moving positive, `Fv- qd - Fc-` moving negative, and exact sticking
+/// (a stopped axis stays stopped while `|gtau vir - offset|` is below the dry magnitude of the
+/// direction it is pushed in).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AxisModel {
+    /// Inertia `M` [kg].
+    pub mass: f64,
+    /// Viscous coefficient moving positive [N s/m].
+    pub viscous_pos: f64,
+    /// Viscous coefficient moving negative [N s/m].
+    pub viscous_neg: f64,
+    /// Dry magnitude moving positive [N] (>= 0).
+    pub dry_pos: f64,
+    /// Dry magnitude moving negative [N] (>= 0).
+    pub dry_neg: f64,
+    /// Constant force on the load side, counted like friction (positive resists positive
+    /// drive) [N].
+    pub offset: f64,
+}
+
+impl AxisModel {
+    /// From the IDIM-LS parameters of `model` (`M, Fv, Fc, offset` or `M, Fv+, Fv-, Fc+, Fc-`).
+    pub fn from_idim(model: IdimModel, theta: &[f64]) -> Option<AxisModel> {
+        match (model, theta) {
+            (IdimModel::Symmetric, [m, fv, fc, off]) => Some(AxisModel {
+                mass: *m,
+                viscous_pos: *fv,
+                viscous_neg: *fv,
+                dry_pos: *fc,
+                dry_neg: *fc,
+                offset: *off,
+            }),
+            (IdimModel::DirectionDependent, [m, fvp, fvn, fcp, fcn]) => Some(AxisModel {
+                mass: *m,
+                viscous_pos: *fvp,
+                viscous_neg: *fvn,
+                dry_pos: *fcp,
+                dry_neg: *fcn,
+                offset: 0.0,
+            }),
+            _ => None,
+        }
+    }
+}
+
+/// A recorded EMPS run with what the closed loop needs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClosedLoopRun {
+    /// Time [s].
+    pub t: Vec<f64>,
+    /// Measured position `qm` [m].
+    pub q: Vec<f64>,
+    /// Reference position `qg` [m].
+    pub reference: Vec<f64>,
+    /// Recorded drive command `vir` [V] (with the pulses, if any).
+    pub vir: Vec<f64>,
+    /// Pulses added to the command after the saturation [V] (`pulses_N`, which is in volts
+    /// despite its name), zero when the file has none.
+    pub pulses_v: Vec<f64>,
+}
+
+/// Loads an EMPS CSV (`t, qm, qg, vir` and optionally `pulses_N`); the error names the file and
+/// the missing column or bad line.
+pub fn load_closed_loop(path: &std::path::Path) -> Result<ClosedLoopRun, String> {
+    let table = crate::data::read_table(path).map_err(|e| e.to_string())?;
+    let col = |name: &str| -> Result<Vec<f64>, String> {
+        table
+            .header
+            .iter()
+            .position(|h| h == name)
+            .map(|i| table.columns[i].clone())
+            .ok_or_else(|| format!("{}: no column `{name}`", path.display()))
+    };
+    let t = col("t")?;
+    if t.len() < 3 {
+        return Err(format!("{}: fewer than 3 samples", path.display()));
+    }
+    let pulses_v = col("pulses_N").unwrap_or_else(|_| vec![0.0; t.len()]);
+    Ok(ClosedLoopRun {
+        q: col("qm")?,
+        reference: col("qg")?,
+        vir: col("vir")?,
+        pulses_v,
+        t,
+    })
+}
+
+/// A closed-loop simulation and its relative errors `100 ||y - yhat|| / ||y||` [%].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ClosedLoopSim {
+    /// Simulated position [m].
+    pub q: Vec<f64>,
+    /// Simulated command as recorded (saturated controller output plus pulses) [V].
+    pub vir: Vec<f64>,
+    /// Relative position error [%].
+    pub position_err_pct: f64,
+    /// Relative force error (`gtau vir`) [%].
+    pub force_err_pct: f64,
+}
+
+/// Model substeps per sample of the closed-loop simulation.
+pub const SUBSTEPS: usize = 10;
+
+/// Simulates `model` in closed loop with `ctl` on the run's reference (and pulses), from the
+/// run's first measured position at rest, and compares with the measured position and force.
+pub fn simulate_closed_loop(
+    run: &ClosedLoopRun,
+    model: &AxisModel,
+    ctl: &Controller,
+) -> ClosedLoopSim {
+    let n = run.t.len();
+    let dt = (run.t[n - 1] - run.t[0]) / (n - 1) as f64;
+    let h = dt / SUBSTEPS as f64;
+    let (mut q, mut v) = (run.q[0], 0.0_f64);
+    let mut qs = Vec::with_capacity(n);
+    let mut virs = Vec::with_capacity(n);
+    let (mut q_prev, mut qf_prev) = (q, q);
+    for k in 0..n {
+        let qf = 0.5 * q + 0.5 * q_prev;
+        let qdot = if k == 0 { 0.0 } else { (qf - qf_prev) / dt };
+        let nu = (ctl.kp * ctl.kv * (run.reference[k] - q) - ctl.kv * qdot)
+            .clamp(-ctl.sat_v, ctl.sat_v)
+            + run.pulses_v[k];
+        qs.push(q);
+        virs.push(nu);
+        // command reaching the drive during this sample (zero before the first output)
+        let applied = k.checked_sub(ctl.delay_samples).map_or(0.0, |j| virs[j]);
+        let f = ctl.gtau * applied - model.offset;
+        for _ in 0..SUBSTEPS {
+            if v == 0.0 {
+                if f > model.dry_pos {
+                    v = (f - model.dry_pos) / model.mass * h * 0.5;
+                    q += v * h;
+                } else if f < -model.dry_neg {
+                    v = (f + model.dry_neg) / model.mass * h * 0.5;
+                    q += v * h;
+                }
+                continue;
+            }
+            let fr = if v > 0.0 {
+                model.viscous_pos * v + model.dry_pos
+            } else {
+                model.viscous_neg * v - model.dry_neg
+            };
+            let vn = v + (f - fr) / model.mass * h;
+            if vn * v < 0.0 {
+                // velocity reaches zero inside the substep: stop there
+                q += 0.5 * v * h * (v / (v - vn));
+                v = 0.0;
+            } else {
+                q += 0.5 * (v + vn) * h;
+                v = vn;
+            }
+        }
+        q_prev = qs[k];
+        qf_prev = qf;
+    }
+    let rel = |y: &[f64], yh: &[f64]| -> f64 {
+        let (mut e, mut s) = (0.0, 0.0);
+        for (a, b) in y.iter().zip(yh) {
+            e += (a - b) * (a - b);
+            s += a * a;
+        }
+        100.0 * (e / s.max(1e-300)).sqrt()
+    };
+    ClosedLoopSim {
+        position_err_pct: rel(&run.q, &qs),
+        force_err_pct: rel(&run.vir, &virs),
+        q: qs,
+        vir: virs,
+    }
+}

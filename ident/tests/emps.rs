@@ -92,3 +92,66 @@ fn emps_fit_depends_on_the_processing() {
     let fit = idim_ls(&run, IdimModel::Symmetric, &opt).unwrap();
     assert!(!within(fit.theta[0], 95.1089, 0.01) || fit.rel_err_pct > 4.3);
 }
+
+fn closed_loop_run(file: &str) -> crane_ident::emps::ClosedLoopRun {
+    crane_ident::emps::load_closed_loop(&emps_dir().join(file)).expect("EMPS data loads")
+}
+
+/// Closed-loop force errors [%] (estimation, validation) of the IDIM-LS model `model` fitted
+/// on the estimation run only.
+fn closed_loop_errors(model: IdimModel) -> (f64, f64) {
+    closed_loop_errors_with(model, crane_ident::emps::Controller::default())
+}
+
+fn closed_loop_errors_with(model: IdimModel, ctl: crane_ident::emps::Controller) -> (f64, f64) {
+    use crane_ident::emps::{simulate_closed_loop, AxisModel};
+    let fit = idim_ls(
+        &load("emps_estimation_raw.csv"),
+        model,
+        &IdimOptions::default(),
+    )
+    .unwrap();
+    let m = AxisModel::from_idim(model, &fit.theta).unwrap();
+    let est = simulate_closed_loop(&closed_loop_run("emps_estimation_raw.csv"), &m, &ctl);
+    let val = simulate_closed_loop(&closed_loop_run("emps_validation_pulses_raw.csv"), &m, &ctl);
+    eprintln!(
+        "{model:?}, command delay {} sample(s): estimation position {:.5} % force {:.3} %; validation position {:.5} % force {:.3} %",
+        ctl.delay_samples,
+        est.position_err_pct,
+        est.force_err_pct,
+        val.position_err_pct,
+        val.force_err_pct
+    );
+    (est.force_err_pct, val.force_err_pct)
+}
+
+#[test]
+fn emps_closed_loop_force_errors() {
+    let (se, sv) = closed_loop_errors(IdimModel::Symmetric);
+    let (de, dv) = closed_loop_errors(IdimModel::DirectionDependent);
+    // the published closed-loop simulation of the symmetric model: 5.85 % / 8.94 %; ours (the
+    // README's controller with its one-sample command delay, exact sticking) is near it
+    assert!(
+        (se - 5.85).abs() < 2.5 && (sv - 8.94).abs() < 2.5,
+        "{se} {sv}"
+    );
+    // the direction-dependent model is better in closed loop too, on both runs
+    assert!(de < se - 0.2 && dv < sv - 0.2, "{de} {dv} vs {se} {sv}");
+}
+
+#[test]
+fn emps_closed_loop_force_error_depends_on_the_command_delay() {
+    // The README's rig applies the command one sample later; without that delay the same
+    // symmetric model's simulated force error drops (measured 5.32 % / 6.00 % against
+    // 7.89 % / 9.85 %): the published 5.85 % / 8.94 % lie between, so the published
+    // simulation's exact timing is not pinned down by its figures.
+    let ctl = crane_ident::emps::Controller {
+        delay_samples: 0,
+        ..Default::default()
+    };
+    let (e0, v0) = closed_loop_errors_with(IdimModel::Symmetric, ctl);
+    let (e1, v1) = closed_loop_errors(IdimModel::Symmetric);
+    assert!(e0 < e1 - 1.0 && v0 < v1 - 1.0, "{e0} {v0} vs {e1} {v1}");
+    assert!(e0 < 5.85 && 5.85 < e1, "{e0} {e1}");
+    assert!(v0 < 8.94 && 8.94 < v1, "{v0} {v1}");
+}

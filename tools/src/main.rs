@@ -131,6 +131,10 @@ enum Command {
         /// Fit the paper's friction structure as the baseline first (crane data too).
         #[arg(long)]
         fit_baseline: bool,
+        /// Single-axis data: start from the symmetric Coulomb + viscous model
+        /// `M qdd + Fv qd + Fc sign(qd)` instead of the paper's structure (the EMPS story).
+        #[arg(long, conflicts_with_all = ["params", "fit_baseline"])]
+        symmetric: bool,
         /// Write the report here (JSON).
         #[arg(long)]
         json: Option<PathBuf>,
@@ -179,12 +183,14 @@ fn main() {
             dataset,
             params,
             fit_baseline,
+            symmetric,
             json,
             plots,
         } => story::diagnose(
             &dataset,
             params.as_deref(),
             fit_baseline,
+            symmetric,
             json.as_deref(),
             plots,
         ),
