@@ -870,17 +870,23 @@ pub fn diagnose_crane(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Di
                 drive_series(&f, &diff)
             })
         };
-        let mut best_dz: Option<(f64, f64)> = None;
-        let mut d = 0.02;
-        while d <= 1.5 + 1e-9 {
+        let score_dz = |d: f64| {
             let col = shifted(
                 &|u: &[f64]| u.iter().map(|&x| deadband(x, d)).collect(),
                 false,
             );
-            let s = sse_one(&col, 1.0, &fg.r);
-            if best_dz.is_none_or(|b| s < b.0) {
-                best_dz = Some((s, d));
+            sse_one(&col, 1.0, &fg.r)
+        };
+        let keep = |best: &mut Option<(f64, f64)>, d: f64| {
+            let s = score_dz(d);
+            if best.is_none_or(|b| s < b.0) {
+                *best = Some((s, d));
             }
+        };
+        let mut best_dz: Option<(f64, f64)> = None;
+        let mut d = 0.02;
+        while d <= 1.5 + 1e-9 {
+            keep(&mut best_dz, d);
             d += 0.02;
         }
         // refine to a millivolt: the grid step alone leaves a dry-force error of `K * 0.01 V`,
@@ -888,16 +894,8 @@ pub fn diagnose_crane(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Di
         if let Some((_, d0)) = best_dz {
             for j in -20..=20 {
                 let d = d0 + j as f64 * 1e-3;
-                if d <= 0.0 {
-                    continue;
-                }
-                let col = shifted(
-                    &|u: &[f64]| u.iter().map(|&x| deadband(x, d)).collect(),
-                    false,
-                );
-                let s = sse_one(&col, 1.0, &fg.r);
-                if best_dz.is_none_or(|b| s < b.0) {
-                    best_dz = Some((s, d));
+                if d > 0.0 {
+                    keep(&mut best_dz, d);
                 }
             }
         }

@@ -54,24 +54,7 @@ pub(crate) fn margin<R: Real>(ax: &AxisCoeffs<R>, q: R, hold: R, dir: Mode) -> R
 ///
 /// Motion into a limit the axis sits at is not a candidate. `Positive` wins a tie.
 pub(crate) fn candidate<R: Real>(ax: &AxisCoeffs<R>, q: R, hold: R) -> Option<(Mode, R)> {
-    let mut best: Option<(Mode, R)> = None;
-    if q < ax.max {
-        let m = margin(ax, q, hold, Mode::Positive);
-        if m > R::ZERO {
-            best = Some((Mode::Positive, m));
-        }
-    }
-    if q > ax.min {
-        let m = margin(ax, q, hold, Mode::Negative);
-        let better = match best {
-            Some((_, b)) => m > b,
-            None => m > R::ZERO,
-        };
-        if better {
-            best = Some((Mode::Negative, m));
-        }
-    }
-    best
+    candidate_with(ax, q, hold, thresholds(ax, q))
 }
 
 /// The breakaway thresholds `(Cbar+(q), Cbar-(q))` of an axis at `q` (stiction included).
