@@ -30,8 +30,9 @@ step "firmware cross build (release)"
 cargo build -p firmware --target thumbv7em-none-eabihf --release
 
 step "firmware under QEMU (mps2-an386)"
-timeout 300 cargo run -q -p firmware --target thumbv7em-none-eabihf --release > target/qemu-run.log
-tail -n 3 target/qemu-run.log
+qemu_log="${CARGO_TARGET_DIR:-target}/qemu-run.log"
+timeout 300 cargo run -q -p firmware --target thumbv7em-none-eabihf --release > "$qemu_log"
+tail -n 3 "$qemu_log"
 
 step "host tests (including the QEMU cross-checks, marked ignored for plain cargo test)"
 cargo test --workspace --exclude firmware -- --include-ignored

@@ -124,7 +124,13 @@ fn run_qemu(elf: &std::path::Path, deadline: Duration) -> String {
 fn firmware_under_qemu_matches_host_bit_for_bit() {
     let elf = std::env::var_os("FIRMWARE_ELF")
         .map(PathBuf::from)
-        .unwrap_or_else(|| workspace_root().join("target/thumbv7em-none-eabihf/release/firmware"));
+        .unwrap_or_else(|| {
+            // the target dir cargo used: CARGO_TARGET_DIR if set (relative to the workspace)
+            let target = std::env::var_os("CARGO_TARGET_DIR")
+                .map(|d| workspace_root().join(d))
+                .unwrap_or_else(|| workspace_root().join("target"));
+            target.join("thumbv7em-none-eabihf/release/firmware")
+        });
     assert!(
         elf.is_file(),
         "firmware ELF not found at {}: build it first with \
