@@ -503,6 +503,8 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
         verdict_reason: reason,
         candidates,
         measures,
+        heldout_simulation: None,
+        final_model: None,
     })
 }
 
