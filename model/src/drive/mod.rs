@@ -112,6 +112,9 @@ pub struct Drive<R: Real = f64> {
     steps: u64,
     applied: R,
     delay: DelayLine<R>,
+    /// `position_force(x)` of a stopped axis that has not moved since it was computed: a
+    /// resting axis costs no position-force evaluation per step (same bits).
+    resting_force: Option<R>,
 }
 
 impl<R: Real> Drive<R> {
@@ -132,6 +135,7 @@ impl<R: Real> Drive<R> {
             steps: 0,
             applied: R::ZERO,
             delay: DelayLine::new(),
+            resting_force: None,
         };
         d.set_state(x0, 0.0)?;
         Ok(d)
@@ -165,6 +169,7 @@ impl<R: Real> Drive<R> {
         };
         self.x = xr;
         self.v = vr;
+        self.resting_force = None;
         Ok(())
     }
 
@@ -186,10 +191,23 @@ impl<R: Real> Drive<R> {
         if !f.is_finite() {
             return Err(DriveStepError::ForceNotFinite);
         }
-        let (x, v, mode, report) = step::step(&self.c, self.h, self.x, self.v, self.mode, f);
+        let px = if self.mode == Mode::Stopped {
+            Some(match self.resting_force {
+                Some(p) => p,
+                None => self.c.restoring.at(self.x),
+            })
+        } else {
+            None
+        };
+        let start = (self.x, self.v, self.mode);
+        let (x, v, mode, report) = step::step(&self.c, self.h, start, f, px.map(|p| f - p));
         if !(x.is_finite() && v.is_finite()) {
             return Err(DriveStepError::NonFinite);
         }
+        // Stopped at the start and at the end without an event or a late reset: the axis
+        // never moved, `x` is the same value and so is its position force.
+        let rested = mode == Mode::Stopped && report == DriveReport::default();
+        self.resting_force = if rested { px } else { None };
         self.x = x;
         self.v = v;
         self.mode = mode;
