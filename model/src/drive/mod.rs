@@ -199,6 +199,15 @@ impl<R: Real> Drive<R> {
         } else {
             None
         };
+        if let Some(p) = px {
+            if step::release(&self.c, self.x, self.v, f - p).0 == Mode::Stopped {
+                // Held for the whole step (the holding force is constant over it): the state
+                // stays as it is, bit for bit; what `step::step` would do, without its set-up.
+                self.commit_input(f, u, k);
+                self.resting_force = Some(p);
+                return Ok(DriveReport::default());
+            }
+        }
         let start = (self.x, self.v, self.mode);
         let (x, v, mode, report) = step::step(&self.c, self.h, start, f, px.map(|p| f - p));
         if !(x.is_finite() && v.is_finite()) {
@@ -211,12 +220,18 @@ impl<R: Real> Drive<R> {
         self.x = x;
         self.v = v;
         self.mode = mode;
+        self.commit_input(f, u, k);
+        Ok(report)
+    }
+
+    /// Records an accepted step's applied force `f` and input `u` (delay `k` steps).
+    #[inline]
+    fn commit_input(&mut self, f: R, u: R, k: usize) {
         self.applied = f;
         if k > 0 {
             self.delay.push(u);
         }
         self.steps += 1;
-        Ok(report)
     }
 
     /// Position [m or rad].
