@@ -258,6 +258,78 @@ fn stick_slip_staircase_on_a_ramp_against_a_spring() {
 }
 
 #[test]
+fn stick_slip_staircase_of_a_joint_against_gravity() {
+    // CICESE-like joint 1: gravity `40.3 sin(x)` N m, static 10.75 / 12.0, kinetic 8 / 9 N m,
+    // a torque ramp of 2 N m/s to 30 N m (below the 40.3 N m gravity can hold at most).
+    let p = DriveParams {
+        motion: Motion::Rotary,
+        inertia: 0.12,
+        viscous_pos: 0.3,
+        viscous_neg: 0.35,
+        kinetic_pos: 8.0,
+        kinetic_neg: 9.0,
+        breakaway_pos: 10.75,
+        breakaway_neg: 12.0,
+        position_force: PositionForce::Pendulum {
+            stiffness: 40.3,
+            center: 0.0,
+        },
+        ..DriveParams::default()
+    };
+    let mut d: Drive = Drive::new(&p, H, 0.0).expect("valid");
+    let s = slips(&mut d, |n| 2.0 * n as f64 * H, 15_000);
+    assert!(s.len() >= 4, "slips: {}", s.len());
+    let first = s[0];
+    // The first slip starts when the torque passes breakaway (x = 0, no gravity yet).
+    let u_first = 2.0 * first.0 as f64 * H;
+    assert!(
+        (u_first - 10.75).abs() < 0.01,
+        "first breakaway at {u_first} N m"
+    );
+    for w in s.windows(2) {
+        assert!(w[1].0 > w[0].1 + 100, "sticks between slips");
+        assert!(w[1].4 > w[0].4, "the torque keeps rising");
+    }
+    for &(_, _, x0, x1, u1) in &s {
+        assert!(x1 > x0, "each slip moves up");
+        let hold = u1 - 40.3 * x1.sin();
+        assert!(
+            hold < 10.75 && hold > -12.0,
+            "stuck with holding torque {hold}"
+        );
+    }
+}
+
+#[test]
+fn a_reversal_passes_through_stopped_within_the_step() {
+    let p = DriveParams {
+        inertia: 1.0,
+        position_force: spring(100.0, 0.0),
+        ..DriveParams::default()
+    };
+    let mut d: Drive = Drive::new(&p, H, 0.1).expect("valid");
+    d.step(0.0).expect("step");
+    assert_eq!(d.mode(), Mode::Negative, "released at once");
+    let mut reversals = 0;
+    for n in 0..2000 {
+        let before = d.mode();
+        let r = d.step(0.0).expect("step");
+        assert_ne!(
+            d.mode(),
+            Mode::Stopped,
+            "step {n}: a frictionless spring never rests"
+        );
+        if d.mode() != before {
+            assert_eq!(r.events, 1, "step {n}: the reversal is a located stop");
+            assert_eq!(r.late_resets, 0);
+            reversals += 1;
+        }
+    }
+    // omega = 10 rad/s: a reversal every pi/10 s, 6 in 2 s.
+    assert_eq!(reversals, 6);
+}
+
+#[test]
 fn without_stiction_and_spring_the_axis_never_sticks_above_kinetic() {
     let kp = 2.0;
     let p = DriveParams {
