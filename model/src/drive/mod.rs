@@ -112,6 +112,9 @@ pub struct Drive<R: Real = f64> {
     steps: u64,
     applied: R,
     delay: DelayLine<R>,
+    /// `position_force(x)` of a stopped axis that has not moved since it was computed: a
+    /// resting axis costs no position-force evaluation per step (same bits).
+    resting_force: Option<R>,
 }
 
 impl<R: Real> Drive<R> {
@@ -132,6 +135,7 @@ impl<R: Real> Drive<R> {
             steps: 0,
             applied: R::ZERO,
             delay: DelayLine::new(),
+            resting_force: None,
         };
         d.set_state(x0, 0.0)?;
         Ok(d)
@@ -165,6 +169,7 @@ impl<R: Real> Drive<R> {
         };
         self.x = xr;
         self.v = vr;
+        self.resting_force = None;
         Ok(())
     }
 
@@ -186,19 +191,47 @@ impl<R: Real> Drive<R> {
         if !f.is_finite() {
             return Err(DriveStepError::ForceNotFinite);
         }
-        let (x, v, mode, report) = step::step(&self.c, self.h, self.x, self.v, self.mode, f);
+        let px = if self.mode == Mode::Stopped {
+            Some(match self.resting_force {
+                Some(p) => p,
+                None => self.c.restoring.at(self.x),
+            })
+        } else {
+            None
+        };
+        if let Some(p) = px {
+            if step::release(&self.c, self.x, self.v, f - p).0 == Mode::Stopped {
+                // Held for the whole step (the holding force is constant over it): the state
+                // stays as it is, bit for bit; what `step::step` would do, without its set-up.
+                self.commit_input(f, u, k);
+                self.resting_force = Some(p);
+                return Ok(DriveReport::default());
+            }
+        }
+        let start = (self.x, self.v, self.mode);
+        let (x, v, mode, report) = step::step(&self.c, self.h, start, f, px.map(|p| f - p));
         if !(x.is_finite() && v.is_finite()) {
             return Err(DriveStepError::NonFinite);
         }
+        // Stopped at the start and at the end without an event or a late reset: the axis
+        // never moved, `x` is the same value and so is its position force.
+        let rested = mode == Mode::Stopped && report == DriveReport::default();
+        self.resting_force = if rested { px } else { None };
         self.x = x;
         self.v = v;
         self.mode = mode;
+        self.commit_input(f, u, k);
+        Ok(report)
+    }
+
+    /// Records an accepted step's applied force `f` and input `u` (delay `k` steps).
+    #[inline]
+    fn commit_input(&mut self, f: R, u: R, k: usize) {
         self.applied = f;
         if k > 0 {
             self.delay.push(u);
         }
         self.steps += 1;
-        Ok(report)
     }
 
     /// Position [m or rad].

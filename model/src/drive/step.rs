@@ -12,7 +12,8 @@
 //! the acceleration: the initial resolution (at most 2), per segment but the last one RK4 (3),
 //! relocation (3) and a resolution (2), the last segment's RK4 (3): `8 (n - 1) + 5`, 61 for
 //! `n = 8`, plus at most `2 * 30` Hermite evaluations per located segment (420). The usual
-//! moving step costs 4 evaluations and a stopped step 1.
+//! moving step costs 4 evaluations and a resting step at most 1 position-force evaluation (none
+//! after the first: [`Drive`](super::Drive) keeps it while the axis rests).
 
 use super::force::Coeffs;
 use crate::modes::Mode;
@@ -35,16 +36,24 @@ pub struct DriveReport {
 }
 
 /// Resolves the mode of the axis at `(x, v)` under the applied force `f`; returns the mode
-/// and the acceleration in it. A moving axis keeps its mode. A stopped axis breaks away
-/// positive if the holding force exceeds `breakaway_pos` (and `x < max`), negative if it is
-/// below `-breakaway_neg` (and `x > min`), the larger positive margin winning (positive on a
-/// tie); the release stands only if the acceleration then has the direction's sign.
+/// and the acceleration in it. A moving axis keeps its mode; a stopped one goes through
+/// [`release`] with its holding force `f - position_force(x)`.
 #[inline]
 pub(crate) fn resolve<R: Real>(c: &Coeffs<R>, x: R, v: R, mode: Mode, f: R) -> (Mode, R) {
     if mode != Mode::Stopped {
         return (mode, c.accel(x, v, mode, f));
     }
-    let hold = c.hold(x, f);
+    release(c, x, v, c.hold(x, f))
+}
+
+/// The breakaway guards of a stopped axis at `x` with holding force `hold`
+/// (`f - position_force(x)`): it breaks away positive if `hold > breakaway_pos` (and
+/// `x < max`), negative if `hold < -breakaway_neg` (and `x > min`), the larger positive margin
+/// winning (positive on a tie); the release stands only if the acceleration
+/// `(hold - friction) / inertia` then has the direction's sign. Returns the mode and the
+/// acceleration (0 when it stays stopped).
+#[inline]
+pub(crate) fn release<R: Real>(c: &Coeffs<R>, x: R, v: R, hold: R) -> (Mode, R) {
     let mut best: Option<(Mode, R)> = None;
     if x < c.max {
         let m = hold - c.breakaway_pos;
@@ -65,7 +74,8 @@ pub(crate) fn resolve<R: Real>(c: &Coeffs<R>, x: R, v: R, mode: Mode, f: R) -> (
     let Some((dir, _)) = best else {
         return (Mode::Stopped, R::ZERO);
     };
-    let a = c.accel(x, v, dir, f);
+    // The same bits as `c.accel(x, v, dir, f)`: `hold` is `c.hold(x, f)`.
+    let a = (hold - c.friction(dir, v)) / c.inertia;
     let consistent = match dir {
         Mode::Positive => a > R::ZERO,
         _ => a < R::ZERO,
@@ -175,20 +185,24 @@ fn sweep<R: Real>(c: &Coeffs<R>, x: &mut R, v: &mut R, mode: &mut Mode) -> bool 
     true
 }
 
-/// Advances `(x, v, mode)` by `h` under the applied force `f` (held). Returns the new state,
-/// mode and what happened. Pure: the caller commits.
+/// Advances `(x, v, mode)` by `h` under the applied force `f` (held). `hold0` is the holding
+/// force `f - position_force(x0)` of a stopped axis when the caller knows it (the same bits
+/// as computing it here; `None` computes it). Returns the new state, mode and what happened.
+/// Pure: the caller commits.
 pub(crate) fn step<R: Real>(
     c: &Coeffs<R>,
     h: R,
-    x0: R,
-    v0: R,
-    mode0: Mode,
+    (x0, v0, mode0): (R, R, Mode),
     f: R,
+    hold0: Option<R>,
 ) -> (R, R, Mode, DriveReport) {
     let (mut x, mut v) = (x0, v0);
     let mut report = DriveReport::default();
     let mut done = R::ZERO;
-    let (mut mode, mut a1) = resolve(c, x, v, mode0, f);
+    let (mut mode, mut a1) = match (mode0, hold0) {
+        (Mode::Stopped, Some(hold)) => release(c, x, v, hold),
+        _ => resolve(c, x, v, mode0, f),
+    };
     for seg in 0..DRIVE_MAX_SEGMENTS {
         if mode == Mode::Stopped {
             // The holding force is constant for the rest of the step: it stays stopped.
