@@ -22,6 +22,7 @@ pub mod drive;
 pub mod fit;
 pub mod hidden;
 pub mod plots;
+mod summary;
 
 use crane_ident::data::{load_dataset, Dataset, Samples};
 use crane_ident::params_file::ParamsFile;

@@ -618,6 +618,7 @@ mod tests {
         assert_eq!(th[1], 0.0);
         assert!(at[1] && !at[0]);
         let (th, at) = bounded_ls(&[&a, &b], &y, &[None, None]).unwrap();
-        assert!((th[1] + 0.5).abs() < 1e-9 && !at[1]);
+        // `fit::ls` adds a 1e-10 relative ridge: agreement to 1e-6, not to rounding
+        assert!((th[1] + 0.5).abs() < 1e-6 && !at[1], "{th:?}");
     }
 }
