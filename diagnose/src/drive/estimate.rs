@@ -172,6 +172,9 @@ pub struct Estimate {
     pub breakaway_scatter: [Option<f64>; 2],
     /// Kinetic friction from the sliding least squares, before any clamp [force units].
     pub kinetic_ls: [f64; 2],
+    /// Per slip of the fitting runs (rest to rest) and direction: its onset level minus its
+    /// mean kinetic friction from the energy balance [force units]; > 0 is stiction.
+    pub slip_gaps: [Vec<f64>; 2],
     /// Sliding samples used.
     pub rows: usize,
 }
@@ -276,6 +279,7 @@ pub fn estimate(
     let mut first_motion: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
     let mut breakaway_scatter = [None, None];
     let mut kin_flags = Vec::new();
+    let mut gaps: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
     for _pass in 0..2 {
         let net = |p: &Prepared, i: usize| {
             applied_input(&p.run.u, i, &s)
@@ -319,26 +323,43 @@ pub fn estimate(
         if !fit_neg && first_motion[1].is_empty() {
             brk[1] = brk[0];
         }
+        // kinetic friction of the stiction structure: from the energy balance of every slip
+        // (rest to rest, so the kinetic energy is 0 at both ends):
+        // mean friction = integral (F - P(x)) dx / dx_total, minus the viscous part; the gap
+        // of a slip is its onset level minus that. This needs no acceleration estimate, which
+        // at a few samples per slip is the least reliable signal.
+        gaps = slip_gaps(
+            fit,
+            th,
+            &s,
+            motion,
+            center,
+            ls.stiffness,
+            ls.offset,
+            ls.visc,
+        );
         let mut fixed = brk;
-        let mut clamp = false;
         for dir in Dir::BOTH {
             let d = dir.index();
-            if s.stiction && ls.kin[d] <= brk[d] {
-                fixed[d] = ls.kin[d];
+            if !s.stiction {
+                continue;
+            }
+            let energy_kinetic = if gaps[d].is_empty() {
+                ls.kin[d]
             } else {
-                if s.stiction {
-                    kin_flags.push(Flag::KineticClamped {
-                        dir,
-                        least_squares: kinetic_ls[d],
-                    });
-                }
-                clamp = true;
+                brk[d] - mean(&gaps[d])
+            };
+            if energy_kinetic > brk[d] {
+                kin_flags.push(Flag::KineticClamped {
+                    dir,
+                    least_squares: energy_kinetic,
+                });
+            } else {
+                fixed[d] = energy_kinetic.max(0.0);
             }
         }
-        if clamp || !s.stiction {
-            ls = ls_pass(&rows, &s, asym, both, Some(fixed)).ok_or(EstimateError::Singular)?;
-            ls.kin = fixed;
-        }
+        ls = ls_pass(&rows, &s, asym, both, Some(fixed)).ok_or(EstimateError::Singular)?;
+        ls.kin = fixed;
     }
     flags.extend(ls.flags.iter().copied());
     flags.extend(kin_flags);
@@ -388,6 +409,7 @@ pub fn estimate(
         first_motion,
         breakaway_scatter,
         kinetic_ls,
+        slip_gaps: gaps,
         rows: rows.len(),
     })
 }
@@ -578,6 +600,66 @@ pub fn bounded_ls(
         }
     }
     None
+}
+
+/// Onset level minus energy-balance kinetic friction of every slip of the fitting runs, per
+/// direction (magnitudes) [force units]. A slip is a motion (see [`motions`]) with rest
+/// before and after it.
+#[allow(clippy::too_many_arguments)]
+fn slip_gaps(
+    fit: &[&Prepared],
+    th: &Thresholds,
+    s: &Structure,
+    motion: Motion,
+    center: f64,
+    stiffness: f64,
+    offset: f64,
+    visc: [f64; 2],
+) -> [Vec<f64>; 2] {
+    let mut out: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
+    for p in fit {
+        let x = &p.run.x;
+        let n = x.len();
+        let net = |i: usize| {
+            applied_input(&p.run.u, i, s) + offset
+                - stiffness * restoring_shape(motion, x[i], center)
+        };
+        for dir in Dir::BOTH {
+            let sg = dir.sign();
+            for (a, b) in motions(&p.v, th.v_move, sg) {
+                // rest before and after: 3 samples each side below the motion threshold
+                let rest_before = a >= 3 && p.v[a - 3..a].iter().all(|v| v.abs() <= th.v_move);
+                let rest_after = b + 3 <= n && p.v[b..b + 3].iter().all(|v| v.abs() <= th.v_move);
+                if !(rest_before && rest_after) {
+                    continue;
+                }
+                let (lo, hi) = (a - 1, (b + 1).min(n - 1));
+                let dx_total = x[hi] - x[lo];
+                if sg * dx_total <= 0.0 {
+                    continue;
+                }
+                let (mut work, mut vdx) = (0.0, 0.0);
+                for i in lo..hi {
+                    let dx = x[i + 1] - x[i];
+                    work += net(i) * dx;
+                    vdx += p.v[i] * dx;
+                }
+                let d = dir.index();
+                // mean friction magnitude over the slip, viscous part removed
+                let kinetic = sg * work / dx_total - sg * visc[d] * vdx / dx_total;
+                out[d].push(sg * net(a) - kinetic);
+            }
+        }
+    }
+    out
+}
+
+fn mean(v: &[f64]) -> f64 {
+    if v.is_empty() {
+        0.0
+    } else {
+        v.iter().sum::<f64>() / v.len() as f64
+    }
 }
 
 /// Median (0 for an empty list).

@@ -378,22 +378,28 @@ fn physical(cause: DriveCause, est: &Estimate, before: &Estimate) -> (bool, Opti
             }
         }
         DriveCause::Stiction => {
+            // named only when the mean gap between the onset level of the slips and their
+            // sliding friction exceeds the run-to-run scatter of the breakaway levels
             let mut named = false;
             let mut why = Vec::new();
             for (d, dir) in Dir::BOTH.iter().enumerate() {
-                let (b, k) = if d == 0 {
-                    (p.breakaway_pos, p.kinetic_pos)
-                } else {
-                    (p.breakaway_neg, p.kinetic_neg)
-                };
-                let gap = b - k;
+                let g = &est.slip_gaps[d];
+                if g.is_empty() {
+                    why.push(format!(
+                        "{dir}: no slip from rest to rest in the fitting runs"
+                    ));
+                    continue;
+                }
+                let gap = g.iter().sum::<f64>() / g.len() as f64;
                 match est.breakaway_scatter[d] {
-                    Some(sc) if gap > sc && gap > 0.0 => named = true,
+                    Some(sc) if gap > sc => named = true,
                     Some(sc) => why.push(format!(
-                        "{dir}: breakaway {b:.4} and kinetic {k:.4} differ by {gap:.4}, within the scatter {sc:.4} of the breakaway levels"
+                        "{dir}: slips start {gap:.4} above their sliding friction ({} slips), within the scatter {sc:.4} of the breakaway levels",
+                        g.len()
                     )),
-                    None if gap > 0.0 => named = true,
-                    None => why.push(format!("{dir}: breakaway {b:.4} equals kinetic {k:.4}")),
+                    None => why.push(format!(
+                        "{dir}: one onset only, the scatter of the breakaway levels is unknown"
+                    )),
                 }
             }
             if named {
