@@ -7,7 +7,7 @@
 //! Models: symmetric `tau = M qdd + Fv qd + Fc sign(qd) + offset`, and direction-dependent
 //! `tau = M qdd + Fv+ qd+ + Fv- qd- + Fc+ [qd > 0] - Fc- [qd < 0]`.
 
-use crate::data::AxisRun;
+use crate::data::{AxisRun, ControllerSpec, Gain, VelocityEstimate};
 use crate::linalg::{lstsq, LsError, LsFit};
 use crate::signal::{butter, decimate, diff_central};
 use serde::{Deserialize, Serialize};
@@ -177,6 +177,60 @@ impl Default for Controller {
             gtau: 35.150651882485,
             delay_samples: 1,
         }
+    }
+}
+
+/// Why a declared controller (`[controller]` of `dataset.toml`) cannot drive
+/// [`simulate_closed_loop`].
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ControllerError {
+    /// The simulation implements the EMPS rig's averaged difference only.
+    #[error("the closed-loop simulation estimates the velocity as the EMPS rig does (`velocity = \"averaged_difference\"`); the data set declares `{0}`")]
+    Velocity(&'static str),
+    /// No velocity feedback (`D = 0`): not the EMPS law `u = kv (kp (r - q) - qdot)`.
+    #[error("the closed-loop simulation needs velocity feedback (kv or kd > 0)")]
+    NoVelocityFeedback,
+}
+
+impl Controller {
+    /// The controller a data set declares, with the input gain (`gtau`; 1 when unknown: the
+    /// simulated effort is then in input units). The EMPS data set's declaration
+    /// (`examples/emps/dataset.toml`) gives [`Controller::default`].
+    pub fn from_declared(spec: &ControllerSpec, gain: Gain) -> Result<Controller, ControllerError> {
+        if spec.velocity != VelocityEstimate::AveragedDifference {
+            return Err(ControllerError::Velocity("backward_difference"));
+        }
+        let d = spec.d_gain();
+        if !(d > 0.0) {
+            return Err(ControllerError::NoVelocityFeedback);
+        }
+        let kp = match spec.kv {
+            Some(_) => spec.kp,
+            None => spec.kp / d,
+        };
+        Ok(Controller {
+            kp,
+            kv: d,
+            sat_v: spec.saturation.unwrap_or(f64::INFINITY),
+            gtau: gain.value().unwrap_or(1.0),
+            delay_samples: spec.delay_samples,
+        })
+    }
+}
+
+impl ClosedLoopRun {
+    /// The closed-loop signals of a loaded single-axis run (`None` when its data set declares
+    /// no controller): position `x`, reference and added input from the declaration, the
+    /// recorded input `u` as the command.
+    pub fn from_axis(run: &AxisRun) -> Option<ClosedLoopRun> {
+        let c = run.closed_loop.as_ref()?;
+        Some(ClosedLoopRun {
+            t: run.t.clone(),
+            q: run.x.clone(),
+            reference: c.reference.clone(),
+            vir: run.u.clone(),
+            pulses_v: c.added_input.clone(),
+        })
     }
 }
 

@@ -349,7 +349,10 @@ pub fn decimate_each<S: AsRef<[f64]>>(runs: &[S], r: usize) -> Result<Vec<f64>, 
     if r == 0 {
         return Err(SignalError::Factor);
     }
-    let total = runs.iter().map(|x| decimated_len(x.as_ref().len(), r)).sum();
+    let total = runs
+        .iter()
+        .map(|x| decimated_len(x.as_ref().len(), r))
+        .sum();
     let mut out = Vec::with_capacity(total);
     for x in runs {
         out.extend(decimate(x.as_ref(), r));
@@ -402,7 +405,10 @@ mod tests {
             Err(SignalError::Cutoff { wn: 1.0 }),
             "the fallible constructor says why"
         );
-        assert!(matches!(try_butter(4, f64::NAN), Err(SignalError::Cutoff { .. })));
+        assert!(matches!(
+            try_butter(4, f64::NAN),
+            Err(SignalError::Cutoff { .. })
+        ));
         assert_eq!(try_butter(0, 0.5), Err(SignalError::Order { order: 0 }));
         assert!(try_cheby1(8, 0.05, 0.2).is_ok());
         assert!(try_cheby1(8, -1.0, 0.2).is_err());
