@@ -201,7 +201,7 @@ impl Controller {
             return Err(ControllerError::Velocity("backward_difference"));
         }
         let d = spec.d_gain();
-        if !(d > 0.0) {
+        if d.is_nan() || d <= 0.0 {
             return Err(ControllerError::NoVelocityFeedback);
         }
         let kp = match spec.kv {

@@ -121,8 +121,8 @@ fn errors_name_file_line_and_column() {
     let e =
         load_err("t,u_x,u_y,u_l,x,y,l,alpha\n0,0,0,0,0.1,0.1,0.3,1.5\n0.1,0,0,0,0.1,0.1,0.3,1.5\n");
     assert!(
-        matches!(&e.problem, Problem::MissingColumn { wanted, found, .. }
-            if wanted.contains("beta") && found.len() == 8),
+        matches!(&e.problem, Problem::MissingColumn(m)
+            if m.wanted.contains("beta") && m.found.len() == 8),
         "{e}"
     );
     assert!(e.to_string().contains("run.csv"), "{e}");

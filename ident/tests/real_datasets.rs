@@ -103,7 +103,7 @@ fn emps_example_declares_the_rig_controller() {
         .as_ref()
         .unwrap()
         .added_input;
-    assert!(pulses.iter().any(|&p| p == 5.0));
+    assert!(pulses.contains(&5.0));
     assert!(ds.runs[0]
         .axis()
         .unwrap()

@@ -4,7 +4,7 @@
 //! (numbers only, no quoting inside fields) and every error must carry the file line counted
 //! with comments and blank lines, which is what this parser tracks.
 
-use super::error::{clip, err, DataError, Problem};
+use super::error::{clip, err, DataError, MissingColumn, Problem};
 use std::collections::{BTreeMap, HashSet};
 use std::path::{Path, PathBuf};
 
@@ -161,11 +161,11 @@ impl Table {
             &self.file,
             None,
             None,
-            Problem::MissingColumn {
+            Problem::MissingColumn(Box::new(MissingColumn {
                 wanted,
                 found: self.header.iter().take(64).map(|h| clip(h)).collect(),
                 hint,
-            },
+            })),
         )
     }
 

@@ -89,6 +89,18 @@ fn list_names(found: &[String]) -> String {
     s
 }
 
+/// A required column that is absent, and what the header has instead.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("missing column {wanted}; the header has {}{}", list_names(found), hint.as_deref().unwrap_or(""))]
+pub struct MissingColumn {
+    /// The column looked for, as shown (with its rename, if any).
+    pub wanted: String,
+    /// Header names found (the first 64, clipped).
+    pub found: Vec<String>,
+    /// A hint when a header name looks like the wanted one (e.g. `t [s]`).
+    pub hint: Option<String>,
+}
+
 /// What is wrong. Texts from the user's files are clipped ([`clip`]) when the problem is
 /// built.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -102,16 +114,9 @@ pub enum Problem {
     /// No header line.
     #[error("no header line")]
     NoHeader,
-    /// A required column is absent.
-    #[error("missing column {wanted}; the header has {}{}", list_names(found), hint.as_deref().unwrap_or(""))]
-    MissingColumn {
-        /// The column looked for, as shown (with its rename, if any).
-        wanted: String,
-        /// Header names found (clipped when shown).
-        found: Vec<String>,
-        /// A hint when a header name looks like the wanted one (e.g. `t [s]`).
-        hint: Option<String>,
-    },
+    /// A required column is absent (boxed: errors stay small).
+    #[error("{0}")]
+    MissingColumn(Box<MissingColumn>),
     /// Two header fields have the same name.
     #[error("column appears twice in the header")]
     DuplicateColumn,

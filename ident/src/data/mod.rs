@@ -14,7 +14,7 @@ pub mod timebase;
 pub mod units;
 
 pub use csv::{parse_table, read_table, Table};
-pub use error::{clip, DataError, Location, Problem};
+pub use error::{clip, DataError, Location, MissingColumn, Problem};
 pub use spec::{
     parse_spec, BreakawayNoise, Constants, ControllerSpec, DatasetSpec, RunKind, RunSpec,
     VelocityEstimate,
@@ -329,8 +329,8 @@ pub fn axis_run(
         ("u", ds.input_unit(), ds.gain(run))
     } else {
         let mut e = table.missing("u", renames);
-        if let Problem::MissingColumn { wanted, .. } = &mut e.problem {
-            *wanted = format!("{wanted} (or `force`)");
+        if let Problem::MissingColumn(m) = &mut e.problem {
+            m.wanted = format!("{} (or `force`)", m.wanted);
         }
         return Err(e);
     };
