@@ -397,7 +397,7 @@ pub fn axis_run(
         notes: Vec::new(),
     };
     if let TimeBase::Irregular(why) = tb {
-        let h = why.median_step_s;
+        let h = why.grid_step_s;
         let (grid, rows) = timebase::zoh_rows(&out.t, h);
         let rows_in = out.t.len();
         out = AxisRun {

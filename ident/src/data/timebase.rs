@@ -7,7 +7,8 @@
 //! - every step within `±`[`JITTER_TOLERANCE`] of the median step: the run is uniform and kept
 //!   as recorded;
 //! - otherwise the stamps are irregular. A crane run is refused. A single-axis run is
-//!   resampled on the grid `t0 + k h` (`h` the median step) by zero-order hold of the last
+//!   resampled on the grid `t0 + k h` (`h` the mean of the ordinary steps, those up to 1.5
+//!   median steps) by zero-order hold of the last
 //!   row at or before each grid instant, unless a step exceeds [`MAX_GAP_STEPS`] median
 //!   steps (rows lost: holding would invent a rest), which refuses the run;
 //! - a channel that changes only every few rows while it moves (never on two consecutive rows,
@@ -44,6 +45,9 @@ pub struct Irregularity {
     pub step_s: f64,
     /// Median step of the run [s].
     pub median_step_s: f64,
+    /// Step of the resampling grid: the mean of the steps not longer than 1.5 median steps
+    /// (the ordinary steps; with alternating jitter the median is one of the two values) [s].
+    pub grid_step_s: f64,
     /// Number of steps outside the tolerance.
     pub irregular_steps: usize,
 }
@@ -59,7 +63,7 @@ pub enum LoadNote {
         rows_in: usize,
         /// Samples on the grid.
         rows_out: usize,
-        /// Grid step (the median step) [s].
+        /// Grid step [s] ([`Irregularity::grid_step_s`]).
         step_s: f64,
     },
     /// A channel refreshed only every few rows (repeated values while it moves).
@@ -112,7 +116,7 @@ impl fmt::Display for LoadNote {
 pub enum TimeBase {
     /// Every step within the tolerance: keep the rows.
     Uniform,
-    /// Irregular but resamplable: the grid step and why.
+    /// Irregular but resamplable: why, and the grid step.
     Irregular(Irregularity),
 }
 
@@ -166,10 +170,15 @@ pub fn check_time(t: &[f64], lines: &[usize]) -> Result<TimeBase, (usize, Proble
         return Ok(TimeBase::Uniform);
     }
     let line = lines.get(worst).copied().unwrap_or(worst + 1);
+    let (sum, count) = steps
+        .iter()
+        .filter(|&&s| s <= 1.5 * h)
+        .fold((0.0, 0usize), |(a, n), &s| (a + s, n + 1));
     let why = Irregularity {
         line,
         step_s: steps[worst - 1],
         median_step_s: h,
+        grid_step_s: sum / count.max(1) as f64,
         irregular_steps: irregular,
     };
     if let Some(k) = steps.iter().position(|&s| s > MAX_GAP_STEPS * h) {
