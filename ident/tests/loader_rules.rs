@@ -435,3 +435,41 @@ fn validation_kind_is_held_out() {
     assert_eq!(ds.runs[0].kind, RunKind::Validation);
     assert_eq!(ds.spec.runs[0].note.as_deref(), Some("held out"));
 }
+
+#[test]
+fn asynchronous_two_topic_log_is_resampled_and_its_slow_channel_noted() {
+    // a ROS-like log: rows at the union of a 100 Hz position topic and a 33 Hz input topic
+    // (offset 3 ms), each column holding its last message
+    let mut stamps: Vec<(f64, bool)> = (0..300).map(|k| (k as f64 * 0.01, true)).collect();
+    stamps.extend((0..100).map(|k| (k as f64 * 0.03 + 0.003, false)));
+    stamps.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (mut x, mut u) = (0.0, 0.0);
+    let mut s = String::from("t,x,u\n");
+    for (t, is_x) in &stamps {
+        if *is_x {
+            x = 0.1 * (t * 3.0).sin();
+        } else {
+            u = 2.0 * (t * 1.7).cos() + t;
+        }
+        let _ = writeln!(s, "{t},{x},{u}");
+    }
+    let ds = ok("", &s);
+    let a = ds.runs[0].axis().unwrap();
+    assert!(a.resampled(), "{:?}", a.notes);
+    let LoadNote::Resampled { rows_in, .. } = &a.notes[0] else {
+        panic!("{:?}", a.notes)
+    };
+    assert_eq!(*rows_in, 400);
+    // the grid is uniform and covers the log
+    let h = a.t[1] - a.t[0];
+    assert!(a.t.windows(2).all(|w| (w[1] - w[0] - h).abs() < 1e-9));
+    assert!((a.t[a.t.len() - 1] - 2.99).abs() <= h);
+    // the 33 Hz input repeats on the grid: noted as held
+    assert!(
+        a.notes
+            .iter()
+            .any(|n| matches!(n, LoadNote::HeldChannel { column, .. } if column == "u")),
+        "{:?}",
+        a.notes
+    );
+}
