@@ -296,21 +296,25 @@ pub struct ClosedLoopRun {
     pub pulses_v: Vec<f64>,
 }
 
-/// Loads an EMPS CSV (`t, qm, qg, vir` and optionally `pulses_N`); the error names the file and
-/// the missing column or bad line.
-pub fn load_closed_loop(path: &std::path::Path) -> Result<ClosedLoopRun, String> {
-    let table = crate::data::read_table(path).map_err(|e| e.to_string())?;
-    let col = |name: &str| -> Result<Vec<f64>, String> {
-        table
-            .header
-            .iter()
-            .position(|h| h == name)
-            .map(|i| table.columns[i].clone())
-            .ok_or_else(|| format!("{}: no column `{name}`", path.display()))
-    };
+/// Loads an EMPS CSV (`t, qm, qg, vir` and optionally `pulses_N`) with the EMPS column names
+/// hard-wired; the error names the file and the missing column or bad line. A data set that
+/// declares its controller (`[controller]`) gives the same signals through
+/// [`ClosedLoopRun::from_axis`].
+pub fn load_closed_loop(path: &std::path::Path) -> Result<ClosedLoopRun, crate::data::DataError> {
+    use crate::data::Problem;
+    let table = crate::data::read_table(path)?;
+    let none = std::collections::BTreeMap::new();
+    let col = |name: &str| table.take(name, &none, None);
     let t = col("t")?;
     if t.len() < 3 {
-        return Err(format!("{}: fewer than 3 samples", path.display()));
+        return Err(crate::data::DataError {
+            location: crate::data::Location {
+                file: path.to_path_buf(),
+                line: None,
+                column: None,
+            },
+            problem: Problem::BadValue("fewer than 3 samples".into()),
+        });
     }
     let pulses_v = col("pulses_N").unwrap_or_else(|_| vec![0.0; t.len()]);
     Ok(ClosedLoopRun {

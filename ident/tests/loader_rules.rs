@@ -3,7 +3,7 @@
 
 use crane_ident::data::{
     load_dataset, parse_table, DataError, Dataset, Gain, InputUnit, LoadNote, PositionUnit,
-    Problem, RunKind,
+    Problem, RunKind, Timing,
 };
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -192,9 +192,10 @@ fn gaps_and_backward_time_are_refused_at_their_line() {
     assert_eq!(e.location.file, d.join("run.csv"));
     assert_eq!(e.location.line, Some(102), "{e}");
     assert!(
-        matches!(e.problem, Problem::Timing(ref m) if m.contains("rows missing")),
+        matches!(e.problem, Problem::Timing(Timing::Gap { .. })),
         "{e}"
     );
+    assert!(e.to_string().contains("rows missing"), "{e}");
     let (_, e) = fails("", "t,x,u\n0,0,0\n0.01,0,0\n0.005,0,0\n");
     assert_eq!(e.location.line, Some(4));
     assert!(matches!(e.problem, Problem::TimeNotIncreasing { .. }));
@@ -211,9 +212,10 @@ fn crane_run_with_rows_dropped_midway_is_refused() {
     assert_eq!(e.location.file, d.join("run.csv"));
     assert_eq!(e.location.column, Some(("t".to_string(), 1)));
     assert!(
-        matches!(e.problem, Problem::Timing(ref m) if m.contains("uniformly")),
+        matches!(e.problem, Problem::Timing(Timing::IrregularCrane { .. })),
         "{e}"
     );
+    assert!(e.to_string().contains("uniformly sampled"), "{e}");
     assert!(e.location.line.is_some_and(|l| l >= 102), "{e}");
 }
 

@@ -144,7 +144,7 @@ pub enum Problem {
     },
     /// Time steps that cannot be used or resampled sensibly (see `DATA_FORMAT.md`).
     #[error("{0}")]
-    Timing(String),
+    Timing(Timing),
     /// A value outside the plausible range of its unit.
     #[error("{value} is outside [{min}, {max}] {unit} (wrong unit or sign convention?)")]
     OutOfRange {
@@ -163,6 +163,29 @@ pub enum Problem {
     /// A field of `dataset.toml` has a bad value.
     #[error("{0}")]
     BadValue(String),
+}
+
+/// Why a run's time stamps are refused (thresholds: `data::timebase`).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum Timing {
+    /// A step longer than `MAX_GAP_STEPS` median steps: rows were lost.
+    #[error("rows missing: the time step before this row is {step_s} s, {:.1} times the median step {median_step_s} s (more than {}); holding the last value over the gap would invent a rest, so the run is refused (split it into runs at the gap)", step_s / median_step_s, crate::data::timebase::MAX_GAP_STEPS)]
+    Gap {
+        /// The step [s].
+        step_s: f64,
+        /// The run's median step [s].
+        median_step_s: f64,
+    },
+    /// Irregular stamps in a crane run, which must be uniformly sampled.
+    #[error("irregular time stamps: the step ending here is {step_s} s, the median step {median_step_s} s ({irregular_steps} steps deviate more than {:.0} %); crane runs must be uniformly sampled (rows dropped or an asynchronous log?)", crate::data::timebase::JITTER_TOLERANCE * 100.0)]
+    IrregularCrane {
+        /// The most deviating step [s].
+        step_s: f64,
+        /// The run's median step [s].
+        median_step_s: f64,
+        /// Steps outside the tolerance.
+        irregular_steps: usize,
+    },
 }
 
 /// A data error: where and what.

@@ -14,7 +14,7 @@ pub mod timebase;
 pub mod units;
 
 pub use csv::{parse_table, read_table, Table};
-pub use error::{clip, DataError, Location, MissingColumn, Problem};
+pub use error::{clip, DataError, Location, MissingColumn, Problem, Timing};
 pub use spec::{
     parse_spec, BreakawayNoise, Constants, ControllerSpec, DatasetSpec, RunKind, RunSpec,
     VelocityEstimate,
@@ -267,15 +267,11 @@ pub fn crane_run(table: &Table, renames: &BTreeMap<String, String>) -> Result<Cr
             &table.file,
             Some(why.line),
             idx.map(|i| (table.header[i].as_str(), i + 1)),
-            Problem::Timing(format!(
-                "irregular time stamps: the step ending here is {} s, the median step {} s \
-                 ({} steps deviate more than {:.0} %); crane runs must be uniformly sampled \
-                 (rows dropped or an asynchronous log?)",
-                why.step_s,
-                why.median_step_s,
-                why.irregular_steps,
-                timebase::JITTER_TOLERANCE * 100.0
-            )),
+            Problem::Timing(Timing::IrregularCrane {
+                step_s: why.step_s,
+                median_step_s: why.median_step_s,
+                irregular_steps: why.irregular_steps,
+            }),
         ));
     }
     let v = Some((-12.0 - 1e-9, 12.0 + 1e-9, "V"));

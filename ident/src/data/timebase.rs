@@ -16,7 +16,7 @@
 //!   noted ([`LoadNote::HeldChannel`]); its values already are the zero-order hold of its
 //!   fresh samples.
 
-use super::error::Problem;
+use super::error::{Problem, Timing};
 use std::fmt;
 
 /// Largest relative deviation of a time step from the median step for a run to count as
@@ -147,12 +147,6 @@ pub fn check_time(t: &[f64], lines: &[usize]) -> Result<TimeBase, (usize, Proble
     }
     let steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
     let h = median(&steps);
-    if !(h.is_finite() && h > 0.0) {
-        return Err((
-            1,
-            Problem::Timing(format!("median time step {h} s is not a positive number")),
-        ));
-    }
     let mut worst = 0usize;
     let mut worst_dev = 0.0;
     let mut irregular = 0usize;
@@ -184,13 +178,10 @@ pub fn check_time(t: &[f64], lines: &[usize]) -> Result<TimeBase, (usize, Proble
     if let Some(k) = steps.iter().position(|&s| s > MAX_GAP_STEPS * h) {
         return Err((
             k + 1,
-            Problem::Timing(format!(
-                "rows missing: the time step before this row is {} s, {:.1} times the median \
-                 step {h} s (more than {MAX_GAP_STEPS}); holding the last value over the gap \
-                 would invent a rest, so the run is refused (split it into runs at the gap)",
-                steps[k],
-                steps[k] / h
-            )),
+            Problem::Timing(Timing::Gap {
+                step_s: steps[k],
+                median_step_s: h,
+            }),
         ));
     }
     Ok(TimeBase::Irregular(why))
@@ -298,7 +289,9 @@ mod tests {
             *v += 0.1;
         }
         match check_time(&tgap, &lines(100)) {
-            Err((60, Problem::Timing(m))) => assert!(m.contains("rows missing"), "{m}"),
+            Err((60, Problem::Timing(m @ Timing::Gap { .. }))) => {
+                assert!(m.to_string().contains("rows missing"), "{m}")
+            }
             other => panic!("{other:?}"),
         }
         let mut tb = t.clone();
