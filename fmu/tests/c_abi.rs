@@ -91,8 +91,10 @@ fn compare(k: usize) {
         );
         assert_eq!(fmi2ExitInitializationMode(c), FMI2_OK);
     }
-    let mut params = Params::default();
-    params.payload_mass = payload;
+    let params = Params {
+        payload_mass: payload,
+        ..Params::default()
+    };
     let init = State {
         q: [0.25, 0.3, 0.35, std::f64::consts::FRAC_PI_2, 0.0],
         qd: [0.0; 5],
