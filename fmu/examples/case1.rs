@@ -44,12 +44,11 @@ fn main() {
         values.push(format!("\"state.q[{i}]\": {:?}", case.init.q[i]));
         values.push(format!("\"state.qd[{i}]\": {:?}", case.init.qd[i]));
     }
-    let hex: Vec<String> = s
-        .q
-        .iter()
-        .chain(&s.qd)
-        .map(|v| format!("\"{:016x}\"", v.to_bits()))
-        .collect();
+    let hex: Vec<String> =
+        s.q.iter()
+            .chain(&s.qd)
+            .map(|v| format!("\"{:016x}\"", v.to_bits()))
+            .collect();
     println!(
         "{{\"start_values\": {{{}}}, \"duration\": {:?}, \"native_s\": {best:e}, \"final\": [{}]}}",
         values.join(", "),
