@@ -65,6 +65,16 @@ fn body(guid: &str) -> String {
         );
     }
     let _ = writeln!(x, "  </UnitDefinitions>");
+    let _ = writeln!(x, "  <LogCategories>");
+    let _ = writeln!(
+        x,
+        r#"    <Category name="logStatusError" description="a call failed: why (always logged)"/>"#
+    );
+    let _ = writeln!(
+        x,
+        r#"    <Category name="logStatusFatal" description="an internal panic was caught (always logged)"/>"#
+    );
+    let _ = writeln!(x, "  </LogCategories>");
     let _ = writeln!(
         x,
         r#"  <DefaultExperiment startTime="0" stopTime="20" stepSize="{}"/>"#,

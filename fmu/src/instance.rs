@@ -63,7 +63,7 @@ pub enum Phase {
 /// One FMU instance (safe part).
 #[derive(Clone, Debug)]
 pub struct Instance {
-    vars: Vec<Variable>,
+    vars: &'static [Variable],
     settings: Settings,
     inputs: [f64; 3],
     crane: Option<Crane>,
@@ -113,7 +113,7 @@ impl Instance {
     /// A fresh instance with the start values of `modelDescription.xml`.
     pub fn new() -> Self {
         Instance {
-            vars: variables::all(),
+            vars: variables::table(),
             settings: Settings::default(),
             inputs: [0.0; 3],
             crane: None,
@@ -141,13 +141,7 @@ impl Instance {
 
     /// `fmi2Reset`: back to the start values, as after instantiation.
     pub fn reset(&mut self) {
-        *self = Instance {
-            vars: core::mem::take(&mut self.vars),
-            ..Instance::new()
-        };
-        if self.vars.is_empty() {
-            self.vars = variables::all();
-        }
+        *self = Instance::new();
     }
 
     /// `fmi2SetupExperiment`: the start time [s] (finite). Tolerance and stop time are not
@@ -252,7 +246,7 @@ impl Instance {
     }
 
     fn variable(&self, kind: Kind, vr: u32) -> Result<Variable, Failure> {
-        variables::lookup(&self.vars, kind, vr)
+        variables::lookup(self.vars, kind, vr)
             .copied()
             .ok_or_else(|| {
                 Failure::error(format!("no {kind:?} variable with value reference {vr}"))

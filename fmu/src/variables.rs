@@ -553,6 +553,12 @@ pub fn all() -> Vec<Variable> {
     v
 }
 
+/// The variable table, built once per process and shared by every instance.
+pub fn table() -> &'static [Variable] {
+    static TABLE: std::sync::OnceLock<Vec<Variable>> = std::sync::OnceLock::new();
+    TABLE.get_or_init(all)
+}
+
 /// The variable with value reference `vr` and base type `kind`, if any.
 pub fn lookup(vars: &[Variable], kind: Kind, vr: u32) -> Option<&Variable> {
     vars.iter().find(|v| v.vr == vr && v.kind == kind)

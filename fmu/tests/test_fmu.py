@@ -287,7 +287,22 @@ def test_instantiate_reset_free_1000_times_leaks_nothing(description, slave):
     after = rss_kib()
     growth = after - before
     print(f"\nRSS before {before} KiB, after 1000 cycles {after} KiB, growth {growth} KiB")
-    # One leaked instance is > 4 KiB (its variable table alone), so 1000 leaks would be
-    # > 4 MiB; allow 256 KiB of allocator noise.
-    assert growth < 256, f"RSS grew by {growth} KiB over 1000 instantiate/reset/free cycles"
     assert out[0] > 0.25  # the steps did run (X moved under +3 V)
+
+    # The measurement can see a leak: 1000 instances kept alive (the simulator and its name)
+    # grow RSS by about 940 KiB here (the allocator first reuses what the cycles above
+    # freed), well above the 256 KiB allowed below.
+    kept = []
+    start = rss_kib()
+    for _ in range(1000):
+        slave.instantiate()
+        slave.setupExperiment(startTime=0.0)
+        slave.enterInitializationMode()
+        slave.exitInitializationMode()
+        kept.append(slave.component)
+    held = rss_kib() - start
+    for c in kept:
+        slave.fmi2FreeInstance(c)
+    print(f"1000 instances kept alive: RSS growth {held} KiB")
+    assert held > 256, held
+    assert growth < 256, f"RSS grew by {growth} KiB over 1000 instantiate/reset/free cycles"

@@ -34,6 +34,16 @@ fn pack(lib: &Path, out: &Path) -> Result<(), String> {
     if so.get(..4) != Some(b"\x7fELF") {
         return Err(format!("{}: not an ELF shared library", lib.display()));
     }
+    let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => false,
+    };
+    if same(lib, out) {
+        return Err(format!(
+            "--out {} would replace the input --lib",
+            out.display()
+        ));
+    }
     if out.exists() && out.is_dir() {
         return Err(format!("{}: is a directory", out.display()));
     }
