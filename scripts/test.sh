@@ -41,8 +41,9 @@ cargo test --workspace --exclude firmware -- --include-ignored
 # The C-ABI tests (`cargo test -p crane-fmu`) ran with the host tests above. Here: the packed
 # FMU through FMPy (validation, bit-exact trajectory against `crane simulate`, wrong
 # parameter, step not a multiple of h, 1,000 instantiate/reset/free cycles without RSS
-# growth). Measured: ~1 min on a warm build (release build of the FMU and `crane` dominate
-# a cold one).
+# growth). Measured on the 2-core dev machine: 17 s warm (builds up to date, venv present;
+# pytest itself 3 s); cold, add the venv with fmpy + pytest (11 s) and the release builds of
+# the FMU (1.4 min) and of `crane` (user time 1.5 min; 6 min wall at load average 10).
 step "FMU: build crane.fmu, FMPy + pytest"
 ensure_venv() {
   local venv="${CARGO_TARGET_DIR:-target}/venv"
