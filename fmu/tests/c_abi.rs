@@ -242,3 +242,51 @@ fn null_pointers_and_bad_arguments_are_errors_not_crashes() {
         fmi2FreeInstance(c);
     }
 }
+
+#[test]
+fn a_tunable_parameter_changed_while_stepping_continues_from_the_current_state() {
+    let cb = callbacks();
+    let c = instantiate(&cb);
+    let init = State {
+        q: [0.25, 0.3, 0.35, std::f64::consts::FRAC_PI_2, 0.0],
+        qd: [0.0; 5],
+    };
+    let mut crane: Crane = Crane::new(&Params::default(), Config::default(), init).unwrap();
+    let u = [4.0, -3.0, 0.0];
+    unsafe {
+        assert_eq!(fmi2EnterInitializationMode(c), FMI2_OK);
+        assert_eq!(fmi2ExitInitializationMode(c), FMI2_OK);
+        assert_eq!(fmi2SetReal(c, [0, 1, 2].as_ptr(), 3, u.as_ptr()), FMI2_OK);
+        assert_eq!(fmi2DoStep(c, 0.0, 0.5, 0), FMI2_OK);
+    }
+    for _ in 0..500 {
+        crane.step(u).unwrap();
+    }
+    // Heavier payload from t = 0.5 s: the model rebuilt at the current state (modes from the
+    // velocities, as `Crane::new` derives them).
+    let heavier = Params {
+        payload_mass: 0.8,
+        ..Params::default()
+    };
+    let mut crane: Crane = Crane::new(&heavier, Config::default(), crane.state()).unwrap();
+    unsafe {
+        assert_eq!(fmi2SetReal(c, [1000].as_ptr(), 1, [0.8].as_ptr()), FMI2_OK);
+        // A bad value is refused and changes nothing.
+        assert_eq!(
+            fmi2SetReal(c, [1000].as_ptr(), 1, [-0.8].as_ptr()),
+            FMI2_ERROR
+        );
+        assert_eq!(fmi2DoStep(c, 0.5, 0.5, 0), FMI2_OK);
+    }
+    for _ in 0..500 {
+        crane.step(u).unwrap();
+    }
+    let s = crane.state();
+    let want: Vec<u64> = s.q.iter().chain(&s.qd).map(|v| v.to_bits()).collect();
+    let got: Vec<u64> = get(c, &(100..110).collect::<Vec<u32>>())
+        .iter()
+        .map(|v| v.to_bits())
+        .collect();
+    assert_eq!(got, want);
+    unsafe { fmi2FreeInstance(c) };
+}
