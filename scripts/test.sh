@@ -41,8 +41,8 @@ cargo test --workspace --exclude firmware -- --include-ignored
 # The C-ABI tests (`cargo test -p crane-fmu`) ran with the host tests above. Here: the packed
 # FMU through FMPy (validation, bit-exact trajectory against `crane simulate`, wrong
 # parameter, step not a multiple of h, 1,000 instantiate/reset/free cycles without RSS
-# growth). Measured on the 2-core dev machine: 17 s warm (builds up to date, venv present;
-# pytest itself 3 s); cold, add the venv with fmpy + pytest (11 s) and the release builds of
+# growth). Measured on the 2-core dev machine: 6.5 s warm (builds up to date, venv present;
+# pytest itself 3 s); cold, add the venv with fmpy + pytest (36 s) and the release builds of
 # the FMU (1.4 min) and of `crane` (user time 1.5 min; 6 min wall at load average 10).
 step "FMU: build crane.fmu, FMPy + pytest"
 ensure_venv() {
@@ -55,7 +55,6 @@ ensure_venv() {
       python3 -m venv "$venv"
     }
   fi
-  "$venv/bin/python" -m pip install -q --upgrade pip >/dev/null
   "$venv/bin/python" -m pip install -q "$@"
   VENV_PY="$venv/bin/python"
 }
@@ -63,7 +62,7 @@ fmu_target="${CARGO_TARGET_DIR:-target}"
 case "$fmu_target" in /*) ;; *) fmu_target="$PWD/$fmu_target" ;; esac
 bash scripts/build-fmu.sh "$fmu_target/crane.fmu"
 cargo build --release --bin crane
-ensure_venv fmpy pytest
+ensure_venv "fmpy>=0.3.32,<0.4" pytest
 CRANE_FMU="$fmu_target/crane.fmu" CRANE_BIN="$fmu_target/release/crane" \
   "$VENV_PY" -m pytest -q -p no:cacheprovider fmu/tests/test_fmu.py
 # ---- end FMU ------------------------------------------------------------------------------
