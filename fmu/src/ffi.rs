@@ -812,3 +812,33 @@ not_supported!(fmi2GetRealOutputDerivatives(
     order: *const fmi2Integer,
     value: *mut fmi2Real
 ));
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::panic, clippy::undocumented_unsafe_blocks)]
+    use super::*;
+
+    #[test]
+    fn a_panic_in_an_entry_point_becomes_fatal_and_the_instance_is_unusable() {
+        let cb = fmi2CallbackFunctions {
+            logger: None,
+            allocate_memory: None,
+            free_memory: None,
+            step_finished: None,
+            component_environment: std::ptr::null_mut(),
+        };
+        let g = CString::new(guid()).unwrap_or_default();
+        // Pointers below are valid for each call; `c` is freed once at the end.
+        let c =
+            unsafe { fmi2Instantiate(c"t".as_ptr(), 1, g.as_ptr(), std::ptr::null(), &cb, 0, 0) };
+        assert!(!c.is_null());
+        unsafe {
+            assert_eq!(fmi2EnterInitializationMode(c), FMI2_OK);
+            assert_eq!(fmi2ExitInitializationMode(c), FMI2_OK);
+            assert_eq!(guard(c, |_| panic!("injected")), FMI2_FATAL);
+            assert_eq!(fmi2DoStep(c, 0.0, 1e-3, 0), FMI2_ERROR);
+            assert_eq!(fmi2Reset(c), FMI2_OK);
+            fmi2FreeInstance(c);
+        }
+    }
+}
