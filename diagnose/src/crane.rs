@@ -1156,6 +1156,8 @@ pub fn diagnose_crane(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Di
         verdict_reason: reason,
         candidates,
         measures: BTreeMap::new(),
+        heldout_simulation: None,
+        final_model: None,
     })
 }
 

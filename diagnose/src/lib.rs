@@ -18,9 +18,11 @@
 
 pub mod axis;
 pub mod crane;
+pub mod drive;
 pub mod fit;
 pub mod hidden;
 pub mod plots;
+mod summary;
 
 use crane_ident::data::{load_dataset, Dataset, Samples};
 use crane_ident::params_file::ParamsFile;
@@ -167,6 +169,97 @@ pub struct Report {
     /// Extra numbers of the single-axis pipeline (published-measure comparisons).
     #[serde(skip_serializing_if = "BTreeMap::is_empty", default)]
     pub measures: BTreeMap<String, f64>,
+    /// Single-axis open-loop data: the held-out runs simulated from their recorded input with
+    /// the baseline and with the final model.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub heldout_simulation: Option<HeldoutSimulation>,
+    /// Single-axis open-loop data: the final model (baseline plus every finding).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub final_model: Option<FinalModel>,
+}
+
+/// Held-out runs simulated from their recorded input (position NMAE: mean absolute error over
+/// the measured run's position range) [%].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HeldoutSimulation {
+    /// Mean over held-out runs, baseline [%].
+    pub nmae_before: f64,
+    /// Mean over held-out runs, final model [%].
+    pub nmae_after: f64,
+    /// Mean over held-out runs of predicting no motion at all (the first position) [%].
+    pub nmae_no_motion: f64,
+    /// Mean over the held-out runs in which the axis moves (beyond pre-sliding), baseline [%]:
+    /// the measure the causes are selected by (runs that stay at rest cannot tell friction
+    /// models apart).
+    pub moving_nmae_before: f64,
+    /// Same, final model [%].
+    pub moving_nmae_after: f64,
+    /// Same, predicting no motion [%].
+    pub moving_nmae_no_motion: f64,
+    /// Per held-out run.
+    pub runs: Vec<RunSimulation>,
+}
+
+/// One held-out run's simulated position error [%].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RunSimulation {
+    /// Run file.
+    pub file: String,
+    /// Baseline [%].
+    pub nmae_before: f64,
+    /// Final model [%].
+    pub nmae_after: f64,
+    /// Predicting no motion [%].
+    pub nmae_no_motion: f64,
+    /// Whether the measured axis moves in this run (faster than the motion threshold).
+    pub moves: bool,
+}
+
+/// The final single-axis model, in SI units or, when the input gain is unknown, in input
+/// units (`force_unit`). Friction magnitudes are >= 0; `breakaway_*` are net of the modelled
+/// position force, at first motion.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FinalModel {
+    /// Unit of positions (`m` or `rad`).
+    pub position_unit: String,
+    /// Unit of forces (`N`, `N m`, or the input unit).
+    pub force_unit: String,
+    /// Inertia [force unit per (position unit / s^2)].
+    pub inertia: f64,
+    /// Breakaway level towards positive [force unit].
+    pub breakaway_pos: f64,
+    /// Breakaway level towards negative (magnitude) [force unit].
+    pub breakaway_neg: f64,
+    /// Kinetic friction moving positive [force unit].
+    pub kinetic_pos: f64,
+    /// Kinetic friction moving negative (magnitude) [force unit].
+    pub kinetic_neg: f64,
+    /// Viscous friction moving positive [force unit per (position unit / s)].
+    pub viscous_pos: f64,
+    /// Viscous friction moving negative [force unit per (position unit / s)].
+    pub viscous_neg: f64,
+    /// Restoring stiffness [force unit per position unit] (0 when none).
+    pub stiffness: f64,
+    /// Centre of the restoring force [position unit].
+    pub center: f64,
+    /// Constant force offset [force unit].
+    pub offset: f64,
+    /// Input dead band [input units].
+    pub deadband: f64,
+    /// Input delay [samples].
+    pub delay_samples: usize,
+    /// Scatter (standard deviation) of the breakaway levels at every rest-to-motion onset of
+    /// the fitting runs, positive direction [force unit] (0 when unknown).
+    pub breakaway_scatter_pos: f64,
+    /// Same, negative direction.
+    pub breakaway_scatter_neg: f64,
+    /// Net force at first motion per fitting run, positive direction [force unit].
+    pub first_motion_pos: Vec<f64>,
+    /// Same, negative direction (magnitudes).
+    pub first_motion_neg: Vec<f64>,
+    /// What the estimator had to decide (parameters at a bound, directions not fitted,
+    /// causes not named and why).
+    pub flags: Vec<String>,
 }
 
 impl Report {
@@ -219,9 +312,66 @@ pub fn diagnose_dataset(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, 
         crane::diagnose_crane(ds, opts)
     } else if ds.runs.is_empty() {
         Err(DiagnoseError::Input("the data set has no run".into()))
-    } else {
+    } else if opts.baseline == Baseline::Symmetric || closed_loop(ds) {
         axis::diagnose_axis(ds, opts)
+    } else {
+        let (runs, split, info) = drive_runs(ds)?;
+        drive::diagnose_drive(&ds.dir.display().to_string(), runs, split, &info, opts)
     }
+}
+
+/// Whether single-axis data come from a closed loop (the recorded input depends on the
+/// motion; the inverse-dynamics pipeline of [`axis`] with the rig's controller handles them).
+fn closed_loop(ds: &Dataset) -> bool {
+    ds.runs
+        .iter()
+        .any(|r| r.name.contains("emps") || r.name.contains("EMPS"))
+}
+
+/// The single-axis runs of a data set for the simulation pipeline, split into fitting and
+/// held-out runs ([`split_runs`]; one run is cut into its first 70 % and last 30 %).
+fn drive_runs(
+    ds: &Dataset,
+) -> Result<(Vec<drive::DriveRun>, String, drive::DriveInfo), DiagnoseError> {
+    let axis: Vec<(&crane_ident::data::Run, &crane_ident::data::AxisRun)> = ds
+        .runs
+        .iter()
+        .filter_map(|r| r.axis().map(|a| (r, a)))
+        .collect();
+    let kinds: Vec<_> = axis.iter().map(|(r, _)| r.kind).collect();
+    let (split, doc) = split_runs(&kinds);
+    let mut runs = Vec::new();
+    for ((r, a), held) in axis.iter().zip(split) {
+        let dt = a.dt();
+        if !(dt > 0.0 && dt.is_finite()) {
+            return Err(DiagnoseError::Input(format!(
+                "{}: the sample period is not positive",
+                r.name
+            )));
+        }
+        let mk = |lo: usize, hi: usize, held_out: bool| drive::DriveRun {
+            name: r.name.clone(),
+            held_out,
+            dt,
+            x: a.x[lo..hi].to_vec(),
+            u: a.force[lo..hi].to_vec(),
+        };
+        match held {
+            Some(h) => runs.push(mk(0, a.x.len(), h)),
+            None => {
+                let cut = ((a.x.len() as f64) * FIT_FRACTION) as usize;
+                runs.push(mk(0, cut, false));
+                runs.push(mk(cut, a.x.len(), true));
+            }
+        }
+    }
+    let info = drive::DriveInfo {
+        motion: crane_model::drive::Motion::Linear,
+        position_unit: "m".into(),
+        force_unit: "N".into(),
+        symmetric: false,
+    };
+    Ok((runs, doc, info))
 }
 
 /// The documented split: runs of kind `validation` are held out when some runs are not;

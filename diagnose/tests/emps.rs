@@ -59,9 +59,17 @@ fn emps_symmetric_model_misses_the_direction_dependence() {
     );
     assert!((f.parameters["viscous_pos_n_s_per_m"] - 166.7061).abs() < 0.5);
     assert!((f.parameters["viscous_neg_n_s_per_m"] - 240.4236).abs() < 0.5);
+    // the baseline is the published symmetric model WITH its offset: its cross-test on the
+    // validation run is the published 5.9824 %, so the gain of direction dependence is
+    // 5.98 -> 5.36 %, not measured against a weaker baseline
+    assert!((m["force_rel_err_fit_pct"] - 4.0834).abs() < 0.01, "{m:?}");
+    assert!(
+        (m["force_rel_err_held_out_pct"] - 5.9824).abs() < 0.01,
+        "{m:?}"
+    );
     // and the gain holds on the validation run (pulses), which it never saw
     assert!(
-        m["force_rel_err_held_out_after_pct"] < m["force_rel_err_held_out_pct"] - 2.0,
+        m["force_rel_err_held_out_after_pct"] < m["force_rel_err_held_out_pct"] - 0.5,
         "{m:?}"
     );
     assert!(f.nmae_after < f.nmae_before);
@@ -79,19 +87,28 @@ fn emps_symmetric_model_misses_the_direction_dependence() {
 }
 
 #[test]
-fn emps_paper_structure_then_finds_the_one_sample_command_delay() {
+fn emps_paper_structure_claims_no_delay_that_zero_fits_as_well() {
     let r = diagnose_dataset(&emps(), &opts(Baseline::Auto)).unwrap();
     eprintln!("{}", r.to_json());
     let m = &r.measures;
     // the paper's structure (quartic dry friction per direction) fits better than 3.11 %
     assert!(m["force_rel_err_fit_pct"] < 3.11, "{m:?}");
-    assert_eq!(r.verdict, "input_delay");
-    let d = r.findings[0].parameters["delay_s"];
-    eprintln!("delay {d}");
+    // the delay grid starts at 0: on the estimation run no delay fits best, so no delay is
+    // claimed (a grid starting at one sample used to report one)
     assert!(
-        m["force_rel_err_held_out_after_pct"] < m["force_rel_err_held_out_pct"] - 1.0,
-        "{m:?}"
+        r.findings.iter().all(|f| f.cause != "input_delay"),
+        "{:?}",
+        r.findings
     );
+    // every finding cuts the held-out error it reports, and no stiction below 1 is offered
+    for f in &r.findings {
+        assert!(f.nmae_after < f.nmae_before, "{f:?}");
+    }
+    for c in &r.candidates {
+        if c.cause == "stiction" {
+            assert!(!c.supported || c.parameters["ratio"] > 1.0, "{c:?}");
+        }
+    }
     // force offset and direction asymmetry are part of this baseline: not identifiable
     assert!(r
         .candidates

@@ -46,4 +46,5 @@ pub mod params_file;
 pub mod rig;
 pub mod rng;
 pub mod signal;
+pub mod simulate;
 pub mod validate;

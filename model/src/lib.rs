@@ -14,6 +14,8 @@
 //! - [`params`]: parameters, defaults, validation.
 //! - [`extensions`]: effects beyond the paper (localised friction, stiction, bias force, dead
 //!   band, input delay), off by default.
+//! - [`drive`]: a hybrid single-axis drive (inertia, friction per direction with stiction, a
+//!   spring or pendulum force, gain, dead band, delay, end stops), linear or rotary.
 //! - `NUMERICS.md` (next to `Cargo.toml`): the exact operation order that makes the f64 bits
 //!   the same on every platform and equal to the host reference.
 //!
@@ -27,6 +29,7 @@
 #![deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 pub mod crane;
+pub mod drive;
 pub mod dynamics;
 pub mod extensions;
 pub mod friction;
@@ -38,6 +41,10 @@ pub mod solve;
 pub mod state;
 
 pub use crane::{hangs, Config, Crane, FrictionLaw, Output, StepError, MIN_HANG, U_MAX};
+pub use drive::{
+    Drive, DriveOutput, DriveParams, DriveReport, DriveStepError, Motion, PositionForce,
+    DRIVE_MAX_SEGMENTS, MAX_DRIVE_DELAY_STEPS,
+};
 pub use dynamics::{Coeffs, Eval, Law};
 pub use extensions::{Axis, Bump, Direction, Extensions, Stiction, MAX_BUMPS, MAX_DELAY_STEPS};
 pub use integrator::{StepReport, MAX_SEGMENTS, SWING_STOP};

@@ -121,6 +121,10 @@ pub enum Problem {
     BelowOne,
     /// Above the fixed capacity (e.g. a delay longer than the delay line).
     TooLarge,
+    /// A breakaway (static friction) level below the kinetic friction of its direction.
+    BelowKinetic,
+    /// NaN where an infinite value is allowed (e.g. an absent end stop).
+    NotANumber,
 }
 
 /// A rejected parameter, configuration or initial-state field.
@@ -150,6 +154,8 @@ impl fmt::Display for Error {
             }
             Problem::BelowOne => "must be >= 1",
             Problem::TooLarge => "exceeds the fixed capacity",
+            Problem::BelowKinetic => "must be >= the kinetic friction of its direction",
+            Problem::NotANumber => "must not be NaN",
         };
         write!(f, "`{}` {} (got {})", self.field, what, self.value)
     }

@@ -199,41 +199,7 @@ pub fn diagnose(
         std::fs::write(path, report.to_json())
             .with_context(|| format!("write {}", path.display()))?;
     }
-    println!("verdict: {} ({})", report.verdict, report.verdict_reason);
-    for f in &report.findings {
-        println!(
-            "  {} on {}: held-out NMAE {:.3} % -> {:.3} %, parameters {}",
-            f.cause,
-            f.axis,
-            f.nmae_before,
-            f.nmae_after,
-            serde_json::to_string(&f.parameters)?
-        );
-    }
-    let m = &report.measures;
-    if let (Some(b), Some(h)) = (
-        m.get("force_rel_err_fit_pct"),
-        m.get("force_rel_err_held_out_pct"),
-    ) {
-        println!("relative force error, inverse model (fitting / held-out): baseline {b:.2} % / {h:.2} %");
-        if let (Some(a), Some(c)) = (
-            m.get("force_rel_err_fit_after_pct"),
-            m.get("force_rel_err_held_out_after_pct"),
-        ) {
-            println!("  extended {a:.2} % / {c:.2} % (published direction-dependent fit: 3.11 % on the estimation run)");
-        }
-    }
-    for (name, label) in [
-        ("symmetric", "symmetric"),
-        ("direction_dependent", "direction-dependent"),
-    ] {
-        if let (Some(f), Some(h)) = (
-            m.get(&format!("closed_loop_force_err_fit_{name}_pct")),
-            m.get(&format!("closed_loop_force_err_held_out_{name}_pct")),
-        ) {
-            println!("closed-loop simulated force error (fitting / held-out), {label}: {f:.2} % / {h:.2} % (published symmetric: 5.85 % / 8.94 %)");
-        }
-    }
+    print!("{}", report.summary());
     Ok(())
 }
 

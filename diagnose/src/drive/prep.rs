@@ -1,0 +1,230 @@
+//! Stage 1 of the single-axis pipeline: recorded runs on a uniform grid, with velocity and
+//! acceleration estimates and the motion thresholds derived from the data themselves.
+//!
+//! Derivatives are local quadratic (Savitzky-Golay) fits over `2 W + 1 = 5` samples, run by run
+//! (never across a run boundary), shortened at the ends. They are used for the sliding-phase
+//! least squares and to find where the axis moves; the final judgement is always a simulation.
+
+/// Half window of the Savitzky-Golay derivative estimate [samples].
+pub const W: usize = 2;
+
+/// One recorded run of a single drive, on a uniform time grid.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DriveRun {
+    /// File name (as in the data set).
+    pub name: String,
+    /// Held out (scored) rather than fitted.
+    pub held_out: bool,
+    /// Sample period [s] (> 0).
+    pub dt: f64,
+    /// Position [m or rad].
+    pub x: Vec<f64>,
+    /// Input [input units], applied over each sample (zero-order hold).
+    pub u: Vec<f64>,
+}
+
+/// A run with its derivative estimates.
+#[derive(Clone, Debug)]
+pub struct Prepared {
+    /// The run.
+    pub run: DriveRun,
+    /// Velocity [m/s or rad/s].
+    pub v: Vec<f64>,
+    /// Acceleration [m/s^2 or rad/s^2].
+    pub a: Vec<f64>,
+}
+
+impl Prepared {
+    /// Estimates velocity and acceleration of a run.
+    pub fn new(run: DriveRun) -> Prepared {
+        let (v, a) = derivatives(&run.x, run.dt);
+        Prepared { run, v, a }
+    }
+}
+
+/// Velocity and acceleration by local quadratic least squares over `2 W + 1` samples
+/// (fewer at the ends; a run shorter than 3 samples gets zeros).
+pub fn derivatives(x: &[f64], dt: f64) -> (Vec<f64>, Vec<f64>) {
+    let n = x.len();
+    let mut v = vec![0.0; n];
+    let mut a = vec![0.0; n];
+    if n < 3 || dt.is_nan() || dt <= 0.0 {
+        return (v, a);
+    }
+    for i in 0..n {
+        let lo = i.saturating_sub(W);
+        let hi = (i + W + 1).min(n);
+        // centred moments of k = j - i over the window
+        let (mut s0, mut s1, mut s2, mut s3, mut s4) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        let (mut b0, mut b1, mut b2) = (0.0, 0.0, 0.0);
+        for (j, xj) in x.iter().enumerate().take(hi).skip(lo) {
+            let k = j as f64 - i as f64;
+            let k2 = k * k;
+            s0 += 1.0;
+            s1 += k;
+            s2 += k2;
+            s3 += k2 * k;
+            s4 += k2 * k2;
+            let d = xj - x[i];
+            b0 += d;
+            b1 += k * d;
+            b2 += k2 * d;
+        }
+        // solve [s0 s1 s2; s1 s2 s3; s2 s3 s4] c = b  for d(k) = c0 + c1 k + c2 k^2
+        let m = [[s0, s1, s2], [s1, s2, s3], [s2, s3, s4]];
+        if let Some(c) = solve3(m, [b0, b1, b2]) {
+            v[i] = c[1] / dt;
+            a[i] = 2.0 * c[2] / (dt * dt);
+        } else if hi - lo >= 2 {
+            v[i] = (x[hi - 1] - x[lo]) / ((hi - 1 - lo) as f64 * dt);
+        }
+    }
+    (v, a)
+}
+
+fn solve3(m: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
+    let det = |m: &[[f64; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let d = det(&m);
+    if d.is_nan() || d.abs() <= 1e-12 {
+        return None;
+    }
+    let mut out = [0.0; 3];
+    for (c, o) in out.iter_mut().enumerate() {
+        let mut mc = m;
+        for r in 0..3 {
+            mc[r][c] = b[r];
+        }
+        *o = det(&mc) / d;
+    }
+    Some(out)
+}
+
+/// Velocity thresholds derived from the fitting runs (any rig: relative to the fastest motion
+/// seen, floored at the position resolution per sample).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Thresholds {
+    /// Largest |velocity| in the fitting runs [m/s or rad/s].
+    pub v_peak: f64,
+    /// Above it a sample counts as moving (first motion, stick/slip marks): 2 % of `v_peak`,
+    /// at least one position quantum per sample.
+    pub v_move: f64,
+    /// Above it a sample counts as sliding for the least squares: 10 % of `v_peak`.
+    pub v_slide: f64,
+    /// Position resolution: the smallest non-zero step between samples [m or rad].
+    pub quantum: f64,
+}
+
+/// Fraction of the peak velocity above which an axis moves.
+pub const MOVE_FRACTION: f64 = 0.02;
+/// Fraction of the peak velocity above which an axis slides (least-squares rows).
+pub const SLIDE_FRACTION: f64 = 0.1;
+
+impl Thresholds {
+    /// Thresholds from the fitting runs; `None` when they never move.
+    pub fn from_runs(fit: &[&Prepared]) -> Option<Thresholds> {
+        let v_peak = fit
+            .iter()
+            .flat_map(|p| p.v.iter())
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        let quantum = fit
+            .iter()
+            .flat_map(|p| p.run.x.windows(2).map(|w| (w[1] - w[0]).abs()))
+            .filter(|d| *d > 0.0)
+            .fold(f64::INFINITY, f64::min);
+        let dt = fit.iter().map(|p| p.run.dt).fold(f64::INFINITY, f64::min);
+        if v_peak.is_nan() || v_peak <= 0.0 || !quantum.is_finite() || !dt.is_finite() {
+            return None;
+        }
+        let v_move = (MOVE_FRACTION * v_peak).max(quantum / dt);
+        let v_slide = (SLIDE_FRACTION * v_peak).max(v_move);
+        Some(Thresholds {
+            v_peak,
+            v_move,
+            v_slide,
+            quantum,
+        })
+    }
+}
+
+/// Shortest motion that counts as motion [samples]: longer than the `2 W + 1` derivative
+/// values one isolated position jump (an encoder flicker, a pre-sliding snap) can produce.
+pub const MIN_MOTION_SAMPLES: usize = 2 * W + 2;
+
+/// Maximal stretches `[start, end)` where `sign * v > v_th` for at least
+/// [`MIN_MOTION_SAMPLES`] samples in a row (`sign` = +1 or -1).
+pub fn motions(v: &[f64], v_th: f64, sign: f64) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    let mut start: Option<usize> = None;
+    for i in 0..=v.len() {
+        let on = i < v.len() && sign * v[i] > v_th;
+        match (on, start) {
+            (true, None) => start = Some(i),
+            (false, Some(s)) => {
+                if i - s >= MIN_MOTION_SAMPLES {
+                    out.push((s, i));
+                }
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+/// Whether a run moves at all (a motion in either direction).
+pub fn moves(v: &[f64], v_th: f64) -> bool {
+    !motions(v, v_th, 1.0).is_empty() || !motions(v, v_th, -1.0).is_empty()
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn a_single_jump_is_not_motion_a_slip_is() {
+        let dt = 0.01;
+        let mut x = vec![0.0; 40];
+        for q in x.iter_mut().skip(20) {
+            *q = 1e-3;
+        }
+        let (v, _) = derivatives(&x, dt);
+        assert!(!moves(&v, 1e-3));
+        let x: Vec<f64> = (0..40)
+            .map(|k| if k < 10 { 0.0 } else { (k - 10) as f64 * 1e-3 })
+            .collect();
+        let (v, _) = derivatives(&x, dt);
+        assert_eq!(motions(&v, 0.05, 1.0).len(), 1);
+        assert!(motions(&v, 0.05, -1.0).is_empty());
+    }
+
+    use super::*;
+
+    #[test]
+    fn quadratic_derivatives_are_exact_inside() {
+        let dt = 0.01;
+        let x: Vec<f64> = (0..50)
+            .map(|k| {
+                let t = k as f64 * dt;
+                1.0 + 2.0 * t + 1.5 * t * t
+            })
+            .collect();
+        let (v, a) = derivatives(&x, dt);
+        for k in 0..50 {
+            let t = k as f64 * dt;
+            assert!((v[k] - (2.0 + 3.0 * t)).abs() < 1e-9, "v[{k}] = {}", v[k]);
+            assert!((a[k] - 3.0).abs() < 1e-6, "a[{k}] = {}", a[k]);
+        }
+    }
+
+    #[test]
+    fn short_runs_do_not_panic() {
+        for n in 0..4 {
+            let x = vec![0.1; n];
+            let (v, a) = derivatives(&x, 0.01);
+            assert_eq!(v.len(), n);
+            assert!(v.iter().chain(&a).all(|q| q.is_finite()));
+        }
+    }
+}

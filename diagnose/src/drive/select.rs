@@ -1,0 +1,559 @@
+//! Stage 4: the baseline, the candidate causes, forward selection, and the report.
+
+use super::cause::DriveCause;
+use super::estimate::{estimate, Dir, Estimate, Flag, Structure};
+use super::prep::{moves, DriveRun, Prepared, Thresholds};
+use super::score::{nmae, nmae_no_motion, score, simulate, Scored};
+use crate::{
+    AxisError, Candidate, DiagnoseError, DiagnoseOptions, Evidence, FinalModel, Finding,
+    HeldoutSimulation, Report, RunSimulation,
+};
+use crane_model::drive::{Motion, PositionForce};
+use std::collections::BTreeMap;
+
+/// A cause is kept when it cuts the mean held-out simulated NMAE by at least this fraction.
+pub const MIN_GAIN: f64 = 0.05;
+/// Below this held-out simulated NMAE [%] the baseline is called right (`none`).
+pub const NONE_LEVEL: f64 = 5.0;
+/// Largest input delay tried [samples].
+pub const MAX_DELAY: usize = 8;
+/// Dead bands tried, as fractions of the largest |input| of the fitting runs.
+pub const DEADBAND_GRID: [f64; 7] = [0.005, 0.01, 0.02, 0.04, 0.08, 0.15, 0.3];
+
+/// What the data set says about the axis.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DriveInfo {
+    /// Linear or rotary.
+    pub motion: Motion,
+    /// Position unit (`m` or `rad`).
+    pub position_unit: String,
+    /// Unit of forces and friction: `N`, `N m`, or the input unit when the gain is unknown.
+    pub force_unit: String,
+    /// Start from a symmetric baseline (one kinetic and one viscous coefficient).
+    pub symmetric: bool,
+}
+
+/// Diagnoses single-axis runs (open loop: the recorded input drives the model).
+pub fn diagnose_drive(
+    dataset: &str,
+    runs: Vec<DriveRun>,
+    split: String,
+    info: &DriveInfo,
+    opts: &DiagnoseOptions,
+) -> Result<Report, DiagnoseError> {
+    let prepared: Vec<Prepared> = runs.into_iter().map(Prepared::new).collect();
+    let fit: Vec<&Prepared> = prepared.iter().filter(|p| !p.run.held_out).collect();
+    let held: Vec<&Prepared> = prepared.iter().filter(|p| p.run.held_out).collect();
+    if fit.is_empty() || held.is_empty() {
+        return Err(DiagnoseError::Input(
+            "single-axis diagnosis needs at least one fitting and one held-out run".into(),
+        ));
+    }
+    let th = Thresholds::from_runs(&fit).ok_or_else(|| {
+        DiagnoseError::Input(
+            "the fitting runs never move: friction and inertia are not identifiable".into(),
+        )
+    })?;
+    // The restoring force's centre: the mean rest position the runs start from (a rig is
+    // homed at its equilibrium; the centre is not separable from a force offset otherwise).
+    let center =
+        prepared.iter().filter_map(|p| p.run.x.first()).sum::<f64>() / prepared.len() as f64;
+    // Held-out runs in which the axis never leaves rest (beyond pre-sliding) cannot tell
+    // friction models apart (every model that sticks predicts them equally): the selection
+    // scores the runs that move, and the report shows every run.
+    let moving: Vec<bool> = held.iter().map(|r| moves(&r.v, th.v_move)).collect();
+    let selection_runs: Vec<usize> = if moving.iter().any(|&m| m) {
+        (0..held.len()).filter(|&i| moving[i]).collect()
+    } else {
+        (0..held.len()).collect()
+    };
+    let sel = |s: &Scored| -> f64 {
+        selection_runs.iter().map(|&i| s.per_run[i]).sum::<f64>() / selection_runs.len() as f64
+    };
+    let fit_and_score = |s: Structure| -> Result<Scored, String> {
+        let est = estimate(&fit, &th, info.motion, center, s).map_err(|e| e.to_string())?;
+        let mut r = score(est, &held, th.quantum)?;
+        r.selection = sel(&r);
+        Ok(r)
+    };
+
+    // --- baseline ------------------------------------------------------------------------
+    let base_s = Structure {
+        restoring: false,
+        stiction: false,
+        asymmetric: !info.symmetric,
+        offset: false,
+        deadband: 0.0,
+        delay: 0,
+    };
+    let baseline = fit_and_score(base_s).map_err(DiagnoseError::Model)?;
+    let no_motion: Vec<f64> = held.iter().map(|r| nmae_no_motion(r, th.quantum)).collect();
+    let no_motion_mean = no_motion.iter().sum::<f64>() / no_motion.len() as f64;
+    let sel_no_motion =
+        selection_runs.iter().map(|&i| no_motion[i]).sum::<f64>() / selection_runs.len() as f64;
+
+    // --- forward selection -------------------------------------------------------------------
+    let umax = fit
+        .iter()
+        .flat_map(|p| p.run.u.iter())
+        .fold(0.0f64, |m, u| m.max(u.abs()));
+    let mut current = baseline.clone();
+    let mut used: Vec<DriveCause> = Vec::new();
+    let mut findings = Vec::new();
+    let mut candidates = Vec::new();
+    let mut notes: BTreeMap<&'static str, String> = BTreeMap::new();
+    for _round in 0..DriveCause::ALL.len() {
+        let mut best: Option<(DriveCause, Scored, Option<String>)> = None;
+        for cause in DriveCause::ALL {
+            if used.contains(&cause) {
+                continue;
+            }
+            let Some((scored, edge)) = try_cause(cause, &current, &fit_and_score, umax) else {
+                continue;
+            };
+            let (ok, why) = physical(cause, &scored.est, &current.est);
+            let gain = 1.0 - scored.selection / current.selection;
+            let supported = ok && gain >= MIN_GAIN;
+            candidates.push(Candidate {
+                cause: cause.as_str().into(),
+                axis: "axis".into(),
+                parameters: cause_parameters(cause, &scored.est),
+                score: (scored.selection / current.selection).ln(),
+                force_delta_bic: 0.0,
+                supported,
+            });
+            if !ok {
+                if let Some(w) = why {
+                    notes.insert(cause.as_str(), w);
+                }
+                continue;
+            }
+            notes.remove(cause.as_str());
+            if supported
+                && best
+                    .as_ref()
+                    .is_none_or(|b| scored.selection < b.1.selection)
+            {
+                best = Some((cause, scored, edge));
+            }
+        }
+        let Some((cause, scored, edge)) = best else {
+            break;
+        };
+        let mut note = format!(
+            "held-out simulated position NMAE {:.2} % -> {:.2} % over the {} held-out runs that move ({:.2} % -> {:.2} % over all {})",
+            current.selection,
+            scored.selection,
+            selection_runs.len(),
+            current.nmae,
+            scored.nmae,
+            held.len()
+        );
+        if let Some(e) = edge {
+            note.push_str("; ");
+            note.push_str(&e);
+        }
+        findings.push(Finding {
+            cause: cause.as_str().into(),
+            axis: "axis".into(),
+            parameters: cause_parameters(cause, &scored.est),
+            nmae_before: current.selection,
+            nmae_after: scored.selection,
+            evidence: Evidence {
+                force_delta_bic: 0.0,
+                force_rms_before_n: force_rms(&current.est, &held, &th),
+                force_rms_after_n: force_rms(&scored.est, &held, &th),
+                score: (scored.selection / current.selection).ln(),
+                extra_parameters: extra_parameters(cause),
+                held_out_samples: held.iter().map(|r| r.run.x.len()).sum(),
+                identifiable: true,
+                note,
+            },
+        });
+        used.push(cause);
+        current = scored;
+    }
+    let final_ = current;
+
+    // --- verdict ------------------------------------------------------------------------------
+    let (verdict, verdict_reason) = if let Some(f) = findings.first() {
+        let mut r = format!(
+            "{} cuts the held-out simulated position NMAE from {:.2} % to {:.2} % (all findings: {:.2} % -> {:.2} %; predicting no motion: {:.2} %)",
+            f.cause, f.nmae_before, f.nmae_after, baseline.selection, final_.selection, sel_no_motion
+        );
+        if final_.selection > NONE_LEVEL {
+            r.push_str(&format!(
+                "; the rest ({:.2} %) is not explained by any candidate",
+                final_.selection
+            ));
+        }
+        (f.cause.clone(), r)
+    } else if baseline.selection <= NONE_LEVEL {
+        (
+            "none".to_string(),
+            format!(
+                "the baseline's held-out simulated position NMAE is {:.2} % (<= {NONE_LEVEL} %)",
+                baseline.selection
+            ),
+        )
+    } else {
+        (
+            "unexplained".to_string(),
+            format!(
+                "the baseline's held-out simulated position NMAE is {:.2} % (predicting no motion: {:.2} %) and no candidate cuts it by {:.0} % with physical parameters",
+                baseline.selection,
+                sel_no_motion,
+                100.0 * MIN_GAIN
+            ),
+        )
+    };
+
+    // --- report --------------------------------------------------------------------------------
+    let fit_nmae = |est: &Estimate| -> f64 {
+        let v: Vec<f64> = fit
+            .iter()
+            .filter_map(|r| {
+                simulate(est, r)
+                    .ok()
+                    .map(|s| nmae(&s, &r.run.x, th.quantum))
+            })
+            .collect();
+        if v.is_empty() {
+            f64::INFINITY
+        } else {
+            v.iter().sum::<f64>() / v.len() as f64
+        }
+    };
+    let range_mean = held
+        .iter()
+        .map(|r| {
+            let (lo, hi) = r
+                .run
+                .x
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
+                    (l.min(x), h.max(x))
+                });
+            (hi - lo).max(th.quantum)
+        })
+        .sum::<f64>()
+        / held.len() as f64;
+    let baseline_errors = vec![AxisError {
+        axis: "axis".into(),
+        nmae_fit: finite_or_zero(fit_nmae(&baseline.est)),
+        nmae_held_out: baseline.nmae,
+        nmae_noise: 100.0 * 0.5 * th.quantum / range_mean,
+        force_rms_fit_n: force_rms(&baseline.est, &fit, &th),
+        force_rms_held_out_n: force_rms(&baseline.est, &held, &th),
+        force_rel_err_held_out_pct: force_rel(&baseline.est, &held, &th),
+    }];
+    let heldout_simulation = HeldoutSimulation {
+        nmae_before: baseline.nmae,
+        nmae_after: final_.nmae,
+        nmae_no_motion: no_motion_mean,
+        moving_nmae_before: baseline.selection,
+        moving_nmae_after: final_.selection,
+        moving_nmae_no_motion: sel_no_motion,
+        runs: held
+            .iter()
+            .enumerate()
+            .map(|(i, r)| RunSimulation {
+                file: r.run.name.clone(),
+                nmae_before: baseline.per_run[i],
+                nmae_after: final_.per_run[i],
+                nmae_no_motion: no_motion[i],
+                moves: moving[i],
+            })
+            .collect(),
+    };
+    let mut flags: Vec<String> = final_.est.flags.iter().map(Flag::to_string).collect();
+    flags.extend(notes.into_values());
+    let final_model = final_model(&final_.est, info, &flags);
+    if let Some(dir) = &opts.plots_dir {
+        super::plots::write_all(dir, &held, &baseline, &final_, &th, info)
+            .map_err(|e| DiagnoseError::Io(format!("{}: {e}", dir.display())))?;
+    }
+    Ok(Report {
+        dataset: dataset.into(),
+        data: "single_axis".into(),
+        baseline: format!(
+            "{} Coulomb + viscous friction fitted on the fitting runs (sliding least squares, breakaway at first motion), no position force; simulated from the recorded input",
+            if info.symmetric { "symmetric" } else { "direction-dependent" }
+        ),
+        split,
+        baseline_errors,
+        findings,
+        verdict,
+        verdict_reason,
+        candidates,
+        measures: BTreeMap::new(),
+        heldout_simulation: Some(heldout_simulation),
+        final_model: Some(final_model),
+    })
+}
+
+fn finite_or_zero(x: f64) -> f64 {
+    if x.is_finite() {
+        x
+    } else {
+        0.0
+    }
+}
+
+/// Fits and scores the current structure plus one cause; for grid-searched causes the best
+/// grid point, with a note when it lies at the grid's edge.
+fn try_cause(
+    cause: DriveCause,
+    current: &Scored,
+    fit_and_score: &dyn Fn(Structure) -> Result<Scored, String>,
+    umax: f64,
+) -> Option<(Scored, Option<String>)> {
+    let s = current.est.structure;
+    let one = |s: Structure| fit_and_score(s).ok().map(|r| (r, None));
+    match cause {
+        DriveCause::RestoringForce if !s.restoring => one(Structure {
+            restoring: true,
+            ..s
+        }),
+        DriveCause::Stiction if !s.stiction => one(Structure {
+            stiction: true,
+            ..s
+        }),
+        DriveCause::DirectionAsymmetry if !s.asymmetric => one(Structure {
+            asymmetric: true,
+            ..s
+        }),
+        DriveCause::ForceOffset if !s.offset => one(Structure { offset: true, ..s }),
+        DriveCause::InputDeadzone if s.deadband == 0.0 && umax > 0.0 => {
+            let mut best: Option<(usize, Scored)> = None;
+            for (k, f) in DEADBAND_GRID.iter().enumerate() {
+                if let Ok(r) = fit_and_score(Structure {
+                    deadband: f * umax,
+                    ..s
+                }) {
+                    if best.as_ref().is_none_or(|b| r.nmae < b.1.nmae) {
+                        best = Some((k, r));
+                    }
+                }
+            }
+            best.map(|(k, r)| {
+                let edge = (k + 1 == DEADBAND_GRID.len())
+                    .then(|| "dead band at the largest value tried (grid edge)".to_string());
+                (r, edge)
+            })
+        }
+        DriveCause::InputDelay if s.delay == 0 => {
+            let mut best: Option<(usize, Scored)> = None;
+            for d in 1..=MAX_DELAY {
+                if let Ok(r) = fit_and_score(Structure { delay: d, ..s }) {
+                    if best.as_ref().is_none_or(|b| r.nmae < b.1.nmae) {
+                        best = Some((d, r));
+                    }
+                }
+            }
+            best.map(|(d, r)| {
+                let edge = (d == MAX_DELAY).then(|| {
+                    format!("delay at the largest value tried ({MAX_DELAY} samples, grid edge)")
+                });
+                (r, edge)
+            })
+        }
+        _ => None,
+    }
+}
+
+/// Whether a cause's fitted parameters are physical; otherwise why not.
+fn physical(cause: DriveCause, est: &Estimate, before: &Estimate) -> (bool, Option<String>) {
+    let p = &est.params;
+    match cause {
+        DriveCause::RestoringForce => {
+            let k = stiffness(&p.position_force);
+            if k > 0.0 {
+                (true, None)
+            } else {
+                (
+                    false,
+                    Some("restoring_force: the fitted stiffness is 0 (no restoring force in the sliding phases)".into()),
+                )
+            }
+        }
+        DriveCause::Stiction => {
+            // named only when the mean gap between the onset level of the slips and their
+            // sliding friction exceeds the run-to-run scatter of the breakaway levels
+            let mut named = false;
+            let mut why = Vec::new();
+            for (d, dir) in Dir::BOTH.iter().enumerate() {
+                let g = &est.slip_gaps[d];
+                if g.is_empty() {
+                    why.push(format!(
+                        "{dir}: no slip from rest to rest in the fitting runs"
+                    ));
+                    continue;
+                }
+                let gap = g.iter().sum::<f64>() / g.len() as f64;
+                match est.breakaway_scatter[d] {
+                    Some(sc) if gap > sc => named = true,
+                    Some(sc) => why.push(format!(
+                        "{dir}: slips start {gap:.4} above their sliding friction ({} slips), within the scatter {sc:.4} of the breakaway levels",
+                        g.len()
+                    )),
+                    None => why.push(format!(
+                        "{dir}: one onset only, the scatter of the breakaway levels is unknown"
+                    )),
+                }
+            }
+            if named {
+                (true, None)
+            } else {
+                (
+                    false,
+                    Some(format!(
+                        "stiction not named: static and kinetic friction are equal within the run-to-run scatter ({})",
+                        why.join("; ")
+                    )),
+                )
+            }
+        }
+        DriveCause::DirectionAsymmetry => (true, None),
+        DriveCause::ForceOffset => (p.offset.is_finite(), None),
+        DriveCause::InputDeadzone => (est.structure.deadband > before.structure.deadband, None),
+        DriveCause::InputDelay => (est.structure.delay > 0, None),
+    }
+}
+
+fn stiffness(f: &PositionForce) -> f64 {
+    match *f {
+        PositionForce::None => 0.0,
+        PositionForce::Spring { stiffness, .. } | PositionForce::Pendulum { stiffness, .. } => {
+            stiffness
+        }
+    }
+}
+
+fn center_of(f: &PositionForce) -> f64 {
+    match *f {
+        PositionForce::None => 0.0,
+        PositionForce::Spring { center, .. } | PositionForce::Pendulum { center, .. } => center,
+    }
+}
+
+fn extra_parameters(cause: DriveCause) -> usize {
+    match cause {
+        DriveCause::RestoringForce => 1,
+        DriveCause::Stiction => 2,
+        DriveCause::DirectionAsymmetry => 2,
+        DriveCause::ForceOffset => 1,
+        DriveCause::InputDeadzone => 1,
+        DriveCause::InputDelay => 1,
+    }
+}
+
+fn cause_parameters(cause: DriveCause, est: &Estimate) -> BTreeMap<String, f64> {
+    let p = &est.params;
+    let mut m = BTreeMap::new();
+    let ratio = |b: f64, k: f64| if k > 0.0 { b / k } else { 0.0 };
+    match cause {
+        DriveCause::RestoringForce => {
+            m.insert("stiffness".into(), stiffness(&p.position_force));
+            m.insert("center".into(), center_of(&p.position_force));
+        }
+        DriveCause::Stiction => {
+            m.insert("breakaway_pos".into(), p.breakaway_pos);
+            m.insert("breakaway_neg".into(), p.breakaway_neg);
+            m.insert("ratio_pos".into(), ratio(p.breakaway_pos, p.kinetic_pos));
+            m.insert("ratio_neg".into(), ratio(p.breakaway_neg, p.kinetic_neg));
+        }
+        DriveCause::DirectionAsymmetry => {
+            m.insert("kinetic_pos".into(), p.kinetic_pos);
+            m.insert("kinetic_neg".into(), p.kinetic_neg);
+            m.insert("viscous_pos".into(), p.viscous_pos);
+            m.insert("viscous_neg".into(), p.viscous_neg);
+        }
+        DriveCause::ForceOffset => {
+            m.insert("offset".into(), p.offset);
+        }
+        DriveCause::InputDeadzone => {
+            m.insert("deadband".into(), est.structure.deadband);
+        }
+        DriveCause::InputDelay => {
+            m.insert("delay_samples".into(), est.structure.delay as f64);
+        }
+    }
+    m
+}
+
+fn final_model(est: &Estimate, info: &DriveInfo, flags: &[String]) -> FinalModel {
+    let p = &est.params;
+    FinalModel {
+        position_unit: info.position_unit.clone(),
+        force_unit: info.force_unit.clone(),
+        inertia: p.inertia,
+        breakaway_pos: p.breakaway_pos,
+        breakaway_neg: p.breakaway_neg,
+        kinetic_pos: p.kinetic_pos,
+        kinetic_neg: p.kinetic_neg,
+        viscous_pos: p.viscous_pos,
+        viscous_neg: p.viscous_neg,
+        stiffness: stiffness(&p.position_force),
+        center: center_of(&p.position_force),
+        offset: p.offset,
+        deadband: est.structure.deadband,
+        delay_samples: est.structure.delay,
+        breakaway_scatter_pos: est.breakaway_scatter[0].unwrap_or(0.0),
+        breakaway_scatter_neg: est.breakaway_scatter[1].unwrap_or(0.0),
+        first_motion_pos: est.first_motion[0].clone(),
+        first_motion_neg: est.first_motion[1].clone(),
+        flags: flags.to_vec(),
+    }
+}
+
+/// Inverse-dynamics residual of a fitted model on the sliding samples [force units]:
+/// `F - J a - position_force(x) - friction(v)`.
+fn residuals(est: &Estimate, runs: &[&Prepared], th: &Thresholds) -> (f64, f64, usize) {
+    let p = &est.params;
+    let s = &est.structure;
+    let (mut sse, mut ssf, mut n) = (0.0, 0.0, 0usize);
+    for r in runs {
+        for i in 0..r.run.x.len() {
+            let v = r.v[i];
+            if v.abs() <= th.v_slide {
+                continue;
+            }
+            let f = super::estimate::applied_input(&r.run.u, i, s) + p.offset;
+            let pos = stiffness(&p.position_force)
+                * super::estimate::restoring_shape(
+                    p.motion,
+                    r.run.x[i],
+                    center_of(&p.position_force),
+                );
+            let fr = if v > 0.0 {
+                p.kinetic_pos + p.viscous_pos * v
+            } else {
+                -p.kinetic_neg + p.viscous_neg * v
+            };
+            let e = f - p.inertia * r.a[i] - pos - fr;
+            sse += e * e;
+            ssf += f * f;
+            n += 1;
+        }
+    }
+    (sse, ssf, n)
+}
+
+fn force_rms(est: &Estimate, runs: &[&Prepared], th: &Thresholds) -> f64 {
+    let (sse, _, n) = residuals(est, runs, th);
+    if n == 0 {
+        0.0
+    } else {
+        (sse / n as f64).sqrt()
+    }
+}
+
+fn force_rel(est: &Estimate, runs: &[&Prepared], th: &Thresholds) -> f64 {
+    let (sse, ssf, n) = residuals(est, runs, th);
+    if n == 0 || ssf <= 0.0 {
+        0.0
+    } else {
+        100.0 * (sse / ssf).sqrt()
+    }
+}

@@ -1,0 +1,614 @@
+//! Physics of the single-axis drive (`crane_model::Drive`): energy, exact sticking, the
+//! stick-slip staircase, end stops, input path, parameter and input validation.
+
+use crane_model::{
+    Drive, DriveParams, DriveStepError, Mode, Motion, PositionForce, Problem, MAX_DRIVE_DELAY_STEPS,
+};
+
+const H: f64 = 1e-3;
+
+fn spring(stiffness: f64, center: f64) -> PositionForce {
+    PositionForce::Spring { stiffness, center }
+}
+
+/// Mechanical energy `I v^2 / 2 + V(x) - F x` with the applied force `F` constant.
+fn energy(p: &DriveParams, d: &Drive, f: f64) -> f64 {
+    let (x, v) = (d.x(), d.v());
+    let pot = match p.position_force {
+        PositionForce::None => 0.0,
+        PositionForce::Spring { stiffness, center } => 0.5 * stiffness * (x - center).powi(2),
+        PositionForce::Pendulum { stiffness, center } => stiffness * (1.0 - (x - center).cos()),
+    };
+    0.5 * p.inertia * v * v + pot - f * x
+}
+
+/// Largest relative energy drift over 20 s of a frictionless oscillation (10 and 20 turning
+/// points pass through `Stopped`, each located inside its step).
+fn max_drift(p: &DriveParams, x0: f64, u: f64) -> (f64, usize) {
+    let mut d: Drive = Drive::new(p, H, x0).expect("valid");
+    let f = p.gain * u + p.offset;
+    d.step(u).expect("step");
+    let e0 = energy(p, &d, f);
+    let scale = e0.abs().max(1e-12);
+    let (mut worst, mut stops) = (0.0f64, 0usize);
+    for _ in 0..20_000 {
+        let r = d.step(u).expect("step");
+        stops += usize::from(r.events);
+        worst = worst.max((energy(p, &d, f) - e0).abs() / scale);
+    }
+    (worst, stops)
+}
+
+#[test]
+fn frictionless_spring_and_pendulum_conserve_energy() {
+    // omega = 10 rad/s, h = 1 ms: RK4's energy error is ~(omega h)^5 per step; the located
+    // reversals lose at most I a^2 (h / 2^30)^2 / 2 each.
+    let p = DriveParams {
+        inertia: 2.0,
+        position_force: spring(200.0, 0.05),
+        offset: 3.0,
+        ..DriveParams::default()
+    };
+    let (drift, stops) = max_drift(&p, 0.25, 0.0);
+    eprintln!("spring: {stops} located reversals, max relative energy drift {drift:e}");
+    assert!(stops >= 60, "reversals located: {stops}");
+    assert!(drift < 1e-9, "spring: relative energy drift {drift:e}");
+
+    let p = DriveParams {
+        motion: Motion::Rotary,
+        inertia: 0.5,
+        gain: 2.0,
+        position_force: PositionForce::Pendulum {
+            stiffness: 40.0,
+            center: -0.2,
+        },
+        ..DriveParams::default()
+    };
+    let (drift, stops) = max_drift(&p, 1.3, 1.5);
+    eprintln!("pendulum: {stops} located reversals, max relative energy drift {drift:e}");
+    assert!(stops >= 30, "reversals located: {stops}");
+    assert!(drift < 1e-9, "pendulum: relative energy drift {drift:e}");
+}
+
+#[test]
+fn with_friction_energy_never_rises() {
+    let mut checked = 0;
+    for (i, (visc, kin, stiction, stops)) in [
+        (0.0, 0.5, 0.0, false),
+        (0.8, 0.0, 0.0, false),
+        (0.3, 0.4, 0.5, false),
+        (0.0, 0.2, 1.0, true),
+        (2.0, 1.0, 0.2, true),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let p = DriveParams {
+            inertia: 0.3 + 0.2 * i as f64,
+            viscous_pos: visc,
+            viscous_neg: visc * 1.5,
+            kinetic_pos: kin,
+            kinetic_neg: kin * 0.7,
+            breakaway_pos: kin * (1.0 + stiction),
+            breakaway_neg: kin * 0.7 * (1.0 + stiction),
+            offset: 0.4,
+            position_force: if i % 2 == 0 {
+                spring(150.0, 0.0)
+            } else {
+                PositionForce::Pendulum {
+                    stiffness: 30.0,
+                    center: 0.1,
+                }
+            },
+            min: if stops { -0.12 } else { f64::NEG_INFINITY },
+            max: if stops { 0.1 } else { f64::INFINITY },
+            ..DriveParams::default()
+        };
+        let mut d: Drive = Drive::new(&p, H, 0.09).expect("valid");
+        d.set_state(0.09, -3.0).expect("state");
+        let f = p.offset;
+        let mut e = energy(&p, &d, f);
+        let e0 = e.abs();
+        for n in 0..10_000 {
+            d.step(0.0).expect("step");
+            let e2 = energy(&p, &d, f);
+            assert!(
+                e2 <= e + 1e-12 * e0,
+                "case {i}, step {n}: energy rose from {e} to {e2}"
+            );
+            e = e2;
+            checked += 1;
+        }
+        if kin > 0.0 {
+            assert_eq!(
+                d.mode(),
+                Mode::Stopped,
+                "case {i} comes to rest (dry friction)"
+            );
+        }
+    }
+    assert_eq!(checked, 50_000);
+}
+
+#[test]
+fn a_stopped_axis_stays_bit_exactly_put_below_breakaway() {
+    let p = DriveParams {
+        kinetic_pos: 1.0,
+        kinetic_neg: 1.5,
+        breakaway_pos: 2.0,
+        breakaway_neg: 3.0,
+        position_force: spring(50.0, 0.0),
+        offset: 0.25,
+        gain: 0.5,
+        ..DriveParams::default()
+    };
+    // Holding force F - k x = 0.5 u + 0.25 - 50 * 0.01 = 0.5 u - 0.25 must stay in (-3, 2).
+    let x0 = 0.01;
+    let mut d: Drive = Drive::new(&p, H, x0).expect("valid");
+    let mut seed = 12345u64;
+    for n in 0..20_000 {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        let r = (seed >> 11) as f64 / (1u64 << 53) as f64; // [0, 1)
+        let u = -5.5 + 10.0 * r; // hold in [-3.0, 2.0)
+        let u = if n % 1000 == 0 { 4.4999 } else { u }; // near the positive edge
+        d.step(u).expect("step");
+        assert_eq!(
+            d.x().to_bits(),
+            x0.to_bits(),
+            "step {n}: moved to {}",
+            d.x()
+        );
+        assert_eq!(d.v().to_bits(), 0.0f64.to_bits());
+        assert_eq!(d.mode(), Mode::Stopped);
+        let o = d.output();
+        assert_eq!(o.acceleration, 0.0);
+        assert_eq!(
+            o.friction,
+            o.applied - o.position_force,
+            "static friction holds"
+        );
+    }
+    // Just above breakaway it goes.
+    d.step(4.5 + 1e-9).expect("step");
+    assert_eq!(d.mode(), Mode::Positive);
+    assert!(d.x() > x0);
+}
+
+/// Slips of a run: (start step, end step, x at start, x at end, input at the end).
+fn slips(
+    d: &mut Drive,
+    u: impl Fn(usize) -> f64,
+    steps: usize,
+) -> Vec<(usize, usize, f64, f64, f64)> {
+    let mut out = Vec::new();
+    let mut start: Option<(usize, f64)> = None;
+    let mut x_stuck = d.x();
+    for n in 0..steps {
+        let x_before = d.x();
+        d.step(u(n)).expect("step");
+        match (d.mode(), start) {
+            (Mode::Stopped, Some((s, x0))) => {
+                out.push((s, n, x0, d.x(), u(n)));
+                start = None;
+                x_stuck = d.x();
+            }
+            (Mode::Stopped, None) => {
+                assert_eq!(
+                    d.x().to_bits(),
+                    x_stuck.to_bits(),
+                    "stuck axis moved at step {n}"
+                );
+            }
+            (_, None) => start = Some((n, x_before)),
+            _ => {}
+        }
+    }
+    out
+}
+
+#[test]
+fn stick_slip_staircase_on_a_ramp_against_a_spring() {
+    // Joint-like: the torque ramps up slowly against a restoring torque. Breakaway 10, kinetic
+    // 6: each slip overshoots the equilibrium and stops with the holding torque near
+    // 2 * 6 - 10 = 2 < 10, so it sticks again while the torque keeps rising.
+    let (k, bp, kp) = (40.0, 10.0, 6.0);
+    let p = DriveParams {
+        motion: Motion::Rotary,
+        inertia: 0.1,
+        viscous_pos: 0.05,
+        viscous_neg: 0.05,
+        kinetic_pos: kp,
+        kinetic_neg: kp,
+        breakaway_pos: bp,
+        breakaway_neg: bp,
+        position_force: spring(k, 0.0),
+        ..DriveParams::default()
+    };
+    let mut d: Drive = Drive::new(&p, H, 0.0).expect("valid");
+    let rate = 2.0; // N m/s
+    let s = slips(&mut d, |n| rate * n as f64 * H, 60_000);
+    assert!(s.len() >= 10, "slips: {}", s.len());
+    let jump = 2.0 * (bp - kp) / k; // 0.2 rad without damping or ramp
+    for (i, w) in s.windows(2).enumerate() {
+        let (a, b) = (w[0], w[1]);
+        assert!(b.4 > a.4, "the torque keeps rising between slips");
+        assert!(
+            b.0 > a.1 + 100,
+            "slip {i}: sticks a while before the next slip"
+        );
+    }
+    for &(s0, s1, x0, x1, u1) in &s {
+        assert!(x1 > x0, "a slip moves forward");
+        assert!(
+            ((x1 - x0) - jump).abs() < 0.1 * jump,
+            "slip from {x0} to {x1}: jump {} vs {jump}",
+            x1 - x0
+        );
+        assert!(
+            s1 - s0 < 200,
+            "a slip lasts half a period (~50 ms): {} steps",
+            s1 - s0
+        );
+        // Stopped with the holding torque below breakaway (2 * kinetic - breakaway, about).
+        let hold = u1 - k * x1;
+        assert!(hold < bp && hold > -bp, "holding torque {hold} at the stop");
+    }
+}
+
+#[test]
+fn stick_slip_staircase_of_a_joint_against_gravity() {
+    // CICESE-like joint 1: gravity `40.3 sin(x)` N m, static 10.75 / 12.0, kinetic 8 / 9 N m,
+    // a torque ramp of 2 N m/s to 30 N m (below the 40.3 N m gravity can hold at most).
+    let p = DriveParams {
+        motion: Motion::Rotary,
+        inertia: 0.12,
+        viscous_pos: 0.3,
+        viscous_neg: 0.35,
+        kinetic_pos: 8.0,
+        kinetic_neg: 9.0,
+        breakaway_pos: 10.75,
+        breakaway_neg: 12.0,
+        position_force: PositionForce::Pendulum {
+            stiffness: 40.3,
+            center: 0.0,
+        },
+        ..DriveParams::default()
+    };
+    let mut d: Drive = Drive::new(&p, H, 0.0).expect("valid");
+    let s = slips(&mut d, |n| 2.0 * n as f64 * H, 15_000);
+    assert!(s.len() >= 4, "slips: {}", s.len());
+    let first = s[0];
+    // The first slip starts when the torque passes breakaway (x = 0, no gravity yet).
+    let u_first = 2.0 * first.0 as f64 * H;
+    assert!(
+        (u_first - 10.75).abs() < 0.01,
+        "first breakaway at {u_first} N m"
+    );
+    for w in s.windows(2) {
+        assert!(w[1].0 > w[0].1 + 100, "sticks between slips");
+        assert!(w[1].4 > w[0].4, "the torque keeps rising");
+    }
+    for &(_, _, x0, x1, u1) in &s {
+        assert!(x1 > x0, "each slip moves up");
+        let hold = u1 - 40.3 * x1.sin();
+        assert!(
+            hold < 10.75 && hold > -12.0,
+            "stuck with holding torque {hold}"
+        );
+    }
+}
+
+#[test]
+fn a_reversal_passes_through_stopped_within_the_step() {
+    let p = DriveParams {
+        inertia: 1.0,
+        position_force: spring(100.0, 0.0),
+        ..DriveParams::default()
+    };
+    let mut d: Drive = Drive::new(&p, H, 0.1).expect("valid");
+    d.step(0.0).expect("step");
+    assert_eq!(d.mode(), Mode::Negative, "released at once");
+    let mut reversals = 0;
+    for n in 0..2000 {
+        let before = d.mode();
+        let r = d.step(0.0).expect("step");
+        assert_ne!(
+            d.mode(),
+            Mode::Stopped,
+            "step {n}: a frictionless spring never rests"
+        );
+        if d.mode() != before {
+            assert_eq!(r.events, 1, "step {n}: the reversal is a located stop");
+            assert_eq!(r.late_resets, 0);
+            reversals += 1;
+        }
+    }
+    // omega = 10 rad/s: a reversal every pi/10 s, 6 in 2 s.
+    assert_eq!(reversals, 6);
+}
+
+#[test]
+fn without_stiction_and_spring_the_axis_never_sticks_above_kinetic() {
+    let kp = 2.0;
+    let p = DriveParams {
+        inertia: 1.5,
+        viscous_pos: 0.5,
+        kinetic_pos: kp,
+        kinetic_neg: kp,
+        breakaway_pos: kp,
+        breakaway_neg: kp,
+        ..DriveParams::default()
+    };
+    let mut d: Drive = Drive::new(&p, H, 0.0).expect("valid");
+    let mut moved = 0;
+    for n in 0..10_000 {
+        let u = 3.0 * kp * n as f64 / 10_000.0;
+        d.step(u).expect("step");
+        if u > kp {
+            assert_eq!(d.mode(), Mode::Positive, "stuck at step {n} with F = {u}");
+            moved += 1;
+        } else {
+            assert_eq!(
+                d.mode(),
+                Mode::Stopped,
+                "moved at step {n} with F = {u} <= kinetic"
+            );
+        }
+    }
+    assert!(moved > 6000);
+    // With a breakaway above kinetic, the same ramp waits for the breakaway level.
+    let p2 = DriveParams {
+        breakaway_pos: 1.5 * kp,
+        ..p
+    };
+    let mut d: Drive = Drive::new(&p2, H, 0.0).expect("valid");
+    for n in 0..10_000 {
+        let u = 3.0 * kp * n as f64 / 10_000.0;
+        d.step(u).expect("step");
+        if u <= 1.5 * kp {
+            assert_eq!(
+                d.mode(),
+                Mode::Stopped,
+                "broke away below breakaway at F = {u}"
+            );
+        }
+    }
+    assert_eq!(d.mode(), Mode::Positive);
+}
+
+#[test]
+fn end_stops_are_respected_and_absorb_the_impact() {
+    let p = DriveParams {
+        inertia: 0.2,
+        kinetic_pos: 0.3,
+        kinetic_neg: 0.3,
+        breakaway_pos: 0.5,
+        breakaway_neg: 0.5,
+        min: -0.05,
+        max: 0.1,
+        ..DriveParams::default()
+    };
+    let mut d: Drive = Drive::new(&p, H, 0.0).expect("valid");
+    let mut hits = 0;
+    for n in 0..4000 {
+        let u = if (n / 1000) % 2 == 0 { 5.0 } else { -5.0 };
+        let r = d.step(u).expect("step");
+        assert!(
+            d.x() >= p.min && d.x() <= p.max,
+            "x = {} at step {n}",
+            d.x()
+        );
+        if d.x() == p.max || d.x() == p.min {
+            assert_eq!(d.v(), 0.0, "at the stop the axis rests");
+            assert_eq!(d.mode(), Mode::Stopped);
+            hits += usize::from(r.events);
+        }
+    }
+    assert!(hits >= 4, "end-stop events: {hits}");
+    // Pushed into the stop it stays there; pulled away it leaves.
+    d.set_state(p.max, 0.0).expect("state");
+    for _ in 0..100 {
+        d.step(50.0).expect("step");
+        assert_eq!(d.x(), p.max);
+    }
+    d.step(-50.0).expect("step");
+    assert_eq!(d.mode(), Mode::Negative);
+    assert!(d.x() < p.max);
+    // A velocity into a stop is dropped by set_state.
+    d.set_state(p.min, -1.0).expect("state");
+    assert_eq!((d.v(), d.mode()), (0.0, Mode::Stopped));
+}
+
+#[test]
+fn dead_band_and_delay_shape_the_input() {
+    let base = DriveParams {
+        gain: 2.0,
+        deadband: 0.5,
+        delay_steps: 7,
+        ..DriveParams::default()
+    };
+    // Inside the dead band: no force.
+    let mut d: Drive = Drive::new(&base, H, 0.0).expect("valid");
+    for _ in 0..100 {
+        d.step(0.5).expect("step");
+    }
+    assert_eq!((d.x(), d.mode()), (0.0, Mode::Stopped));
+    // A step of 1.5 gives 2 * (1.5 - 0.5) = 2 N exactly 7 steps later.
+    let mut d: Drive = Drive::new(&base, H, 0.0).expect("valid");
+    for n in 0..20 {
+        d.step(1.5).expect("step");
+        let f = d.output().applied;
+        if n < 7 {
+            assert_eq!((f, d.x()), (0.0, 0.0), "step {n}");
+        } else {
+            assert_eq!(f, 2.0, "step {n}");
+            assert!(d.x() > 0.0);
+        }
+    }
+    // The full capacity is usable.
+    let p = DriveParams {
+        delay_steps: MAX_DRIVE_DELAY_STEPS,
+        deadband: 0.0,
+        ..base
+    };
+    let mut d: Drive = Drive::new(&p, H, 0.0).expect("valid");
+    for n in 0..=MAX_DRIVE_DELAY_STEPS {
+        d.step(n as f64 + 1.0).expect("step");
+    }
+    assert_eq!(d.output().applied, 2.0, "the first input, 64 steps later");
+}
+
+#[test]
+fn non_finite_input_is_rejected_with_state_and_delay_line_unchanged() {
+    let p = DriveParams {
+        kinetic_pos: 0.2,
+        kinetic_neg: 0.2,
+        breakaway_pos: 0.3,
+        breakaway_neg: 0.3,
+        position_force: spring(10.0, 0.0),
+        delay_steps: 3,
+        ..DriveParams::default()
+    };
+    let mut a: Drive = Drive::new(&p, H, 0.0).expect("valid");
+    for n in 0..500 {
+        a.step((n as f64 * 0.01).sin() * 3.0).expect("step");
+    }
+    let mut b = a.clone();
+    for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        let (x, v, m, t) = (b.x(), b.v(), b.mode(), b.time());
+        assert_eq!(b.step(bad), Err(DriveStepError::InputNotFinite));
+        assert_eq!(
+            (b.x().to_bits(), b.v().to_bits(), b.mode()),
+            (x.to_bits(), v.to_bits(), m)
+        );
+        assert_eq!(b.time(), t);
+    }
+    // An overflowing force is rejected too.
+    let big = DriveParams {
+        gain: 1e10,
+        delay_steps: 0,
+        ..p
+    };
+    let mut c: Drive = Drive::new(&big, H, 0.0).expect("valid");
+    assert_eq!(c.step(1e300), Err(DriveStepError::ForceNotFinite));
+    assert_eq!((c.x(), c.steps()), (0.0, 0));
+    // The rejected steps did not shift the delay line: both continue bit for bit.
+    for n in 0..500 {
+        let u = (n as f64 * 0.02).cos() * 2.0;
+        a.step(u).expect("step");
+        b.step(u).expect("step");
+        assert_eq!(a.x().to_bits(), b.x().to_bits());
+        assert_eq!(a.v().to_bits(), b.v().to_bits());
+    }
+}
+
+#[test]
+fn bad_parameters_name_their_field() {
+    let ok = DriveParams {
+        kinetic_pos: 1.0,
+        kinetic_neg: 1.0,
+        breakaway_pos: 1.0,
+        breakaway_neg: 1.0,
+        ..DriveParams::default()
+    };
+    assert!(Drive::<f64>::new(&ok, H, 0.0).is_ok());
+    type Case = (fn(&mut DriveParams), &'static str, Problem);
+    let cases: [Case; 17] = [
+        (|p| p.inertia = 0.0, "inertia", Problem::NotPositive),
+        (|p| p.inertia = f64::INFINITY, "inertia", Problem::NotFinite),
+        (|p| p.gain = -1.0, "gain", Problem::NotPositive),
+        (|p| p.viscous_pos = -0.1, "viscous_pos", Problem::Negative),
+        (
+            |p| p.viscous_neg = f64::NAN,
+            "viscous_neg",
+            Problem::NotFinite,
+        ),
+        (|p| p.kinetic_pos = -1.0, "kinetic_pos", Problem::Negative),
+        (|p| p.kinetic_neg = -1.0, "kinetic_neg", Problem::Negative),
+        (
+            |p| p.breakaway_pos = 0.9,
+            "breakaway_pos",
+            Problem::BelowKinetic,
+        ),
+        (
+            |p| p.breakaway_neg = 0.5,
+            "breakaway_neg",
+            Problem::BelowKinetic,
+        ),
+        (|p| p.offset = f64::NAN, "offset", Problem::NotFinite),
+        (
+            |p| p.position_force = spring(-3.0, 0.0),
+            "position_force.stiffness",
+            Problem::Negative,
+        ),
+        (
+            |p| {
+                p.position_force = PositionForce::Pendulum {
+                    stiffness: 1.0,
+                    center: f64::INFINITY,
+                }
+            },
+            "position_force.center",
+            Problem::NotFinite,
+        ),
+        (|p| p.deadband = -0.1, "deadband", Problem::Negative),
+        (|p| p.delay_steps = 65, "delay_steps", Problem::TooLarge),
+        (|p| p.min = f64::NAN, "min", Problem::NotANumber),
+        (|p| p.max = f64::NAN, "max", Problem::NotANumber),
+        (|p| (p.min, p.max) = (1.0, 1.0), "min", Problem::EmptyRange),
+    ];
+    for (mutate, field, problem) in cases {
+        let mut p = ok;
+        mutate(&mut p);
+        let e = Drive::<f64>::new(&p, H, 0.0).expect_err(field);
+        assert_eq!((e.field, e.problem), (field, problem), "{e}");
+        assert!(e.to_string().contains(field));
+    }
+    for (h, problem) in [(0.0, Problem::NotPositive), (f64::NAN, Problem::NotFinite)] {
+        let e = Drive::<f64>::new(&ok, h, 0.0).expect_err("h");
+        assert_eq!((e.field, e.problem), ("h", problem));
+    }
+    let bounded = DriveParams {
+        min: -1.0,
+        max: 1.0,
+        ..ok
+    };
+    let e = Drive::<f64>::new(&bounded, H, 1.5).expect_err("x0");
+    assert_eq!((e.field, e.problem), ("state.x", Problem::OutOfLimits));
+    let mut d = Drive::<f64>::new(&bounded, H, 0.5).expect("valid");
+    let e = d.set_state(0.0, f64::NAN).expect_err("v");
+    assert_eq!((e.field, e.problem), ("state.v", Problem::NotFinite));
+    assert_eq!(d.x(), 0.5, "a rejected set_state changes nothing");
+}
+
+#[test]
+fn f32_drive_follows_f64_on_stick_slip() {
+    let p = DriveParams {
+        motion: Motion::Rotary,
+        inertia: 0.1,
+        viscous_pos: 0.05,
+        viscous_neg: 0.05,
+        kinetic_pos: 6.0,
+        kinetic_neg: 6.0,
+        breakaway_pos: 10.0,
+        breakaway_neg: 10.0,
+        position_force: PositionForce::Pendulum {
+            stiffness: 40.0,
+            center: 0.0,
+        },
+        ..DriveParams::default()
+    };
+    let mut a: Drive<f64> = Drive::new(&p, H, 0.0).expect("valid");
+    let mut b: Drive<f32> = Drive::new(&p, H, 0.0).expect("valid");
+    let mut worst = 0.0f64;
+    for n in 0..20_000 {
+        let u = 30.0 * (n as f64 * H * 0.5).sin();
+        a.step(u).expect("f64 step");
+        b.step(u as f32).expect("f32 step");
+        worst = worst.max((a.x() - f64::from(b.x())).abs());
+    }
+    let range = 2.0; // rad, about
+    assert!(worst < 1e-3 * range, "f32 vs f64 position: {worst}");
+}

@@ -1,0 +1,109 @@
+//! Forces of the drive: the position force, friction per mode, and the acceleration.
+//!
+//! The operation order of every expression is the contract of `NUMERICS.md` ("Single-axis
+//! drive"); the reference in `host-tests/src/drive_reference.rs` computes the same bits.
+
+use super::params::{DriveParams, PositionForce};
+use crate::modes::Mode;
+use crate::real::Real;
+
+/// The position force in the model's scalar type.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Restoring<R> {
+    None,
+    Spring { k: R, c: R },
+    Pendulum { k: R, c: R },
+}
+
+impl<R: Real> Restoring<R> {
+    fn new(p: PositionForce) -> Self {
+        match p {
+            PositionForce::None => Restoring::None,
+            PositionForce::Spring { stiffness, center } => Restoring::Spring {
+                k: R::from_f64(stiffness),
+                c: R::from_f64(center),
+            },
+            PositionForce::Pendulum { stiffness, center } => Restoring::Pendulum {
+                k: R::from_f64(stiffness),
+                c: R::from_f64(center),
+            },
+        }
+    }
+
+    /// Restoring force at `x` [N or N m]: `0`, `k * (x - c)` or `k * sin(x - c)`.
+    #[inline]
+    pub(crate) fn at(&self, x: R) -> R {
+        match *self {
+            Restoring::None => R::ZERO,
+            Restoring::Spring { k, c } => k * (x - c),
+            Restoring::Pendulum { k, c } => k * (x - c).sin(),
+        }
+    }
+}
+
+/// Validated parameters in the model's scalar type.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Coeffs<R> {
+    pub(crate) inertia: R,
+    pub(crate) gain: R,
+    pub(crate) viscous_pos: R,
+    pub(crate) viscous_neg: R,
+    pub(crate) kinetic_pos: R,
+    pub(crate) kinetic_neg: R,
+    pub(crate) breakaway_pos: R,
+    pub(crate) breakaway_neg: R,
+    pub(crate) offset: R,
+    pub(crate) restoring: Restoring<R>,
+    pub(crate) deadband: R,
+    pub(crate) min: R,
+    pub(crate) max: R,
+}
+
+impl<R: Real> Coeffs<R> {
+    /// Converts validated parameters (each value rounded once to `R`).
+    pub(crate) fn new(p: &DriveParams) -> Self {
+        Coeffs {
+            inertia: R::from_f64(p.inertia),
+            gain: R::from_f64(p.gain),
+            viscous_pos: R::from_f64(p.viscous_pos),
+            viscous_neg: R::from_f64(p.viscous_neg),
+            kinetic_pos: R::from_f64(p.kinetic_pos),
+            kinetic_neg: R::from_f64(p.kinetic_neg),
+            breakaway_pos: R::from_f64(p.breakaway_pos),
+            breakaway_neg: R::from_f64(p.breakaway_neg),
+            offset: R::from_f64(p.offset),
+            restoring: Restoring::new(p.position_force),
+            deadband: R::from_f64(p.deadband),
+            min: R::from_f64(p.min),
+            max: R::from_f64(p.max),
+        }
+    }
+
+    /// Holding force at `x` under the applied force `f`: `f - position_force(x)`.
+    #[inline]
+    pub(crate) fn hold(&self, x: R, f: R) -> R {
+        f - self.restoring.at(x)
+    }
+
+    /// Friction of a moving axis [N or N m], the term subtracted in the equation of motion:
+    /// `kinetic_pos + viscous_pos * v` (Positive), `-kinetic_neg + viscous_neg * v`
+    /// (Negative); 0 when stopped (the holding force is then the friction, see `output`).
+    #[inline]
+    pub(crate) fn friction(&self, mode: Mode, v: R) -> R {
+        match mode {
+            Mode::Positive => self.kinetic_pos + self.viscous_pos * v,
+            Mode::Negative => -self.kinetic_neg + self.viscous_neg * v,
+            Mode::Stopped => R::ZERO,
+        }
+    }
+
+    /// Acceleration: `((f - position_force(x)) - friction(mode, v)) / inertia`; exactly 0
+    /// when stopped.
+    #[inline]
+    pub(crate) fn accel(&self, x: R, v: R, mode: Mode, f: R) -> R {
+        if mode == Mode::Stopped {
+            return R::ZERO;
+        }
+        (self.hold(x, f) - self.friction(mode, v)) / self.inertia
+    }
+}
