@@ -326,6 +326,10 @@ fn constants_have_plausible_ranges() {
             "[constants]\nx_range_m = [0, 1e-300]\n",
             "constants.x_range_m",
         ),
+        (
+            "[constants]\nx_range_m = [-1e308, 1e308]\n",
+            "constants.x_range_m",
+        ),
         ("[constants]\nl_range_m = [0, 0.5]\n", "constants.l_range_m"),
         (
             "[constants]\ntrolley_mass_kg = 1e9\n",
