@@ -40,11 +40,7 @@ struct Part {
 const MAXD: usize = 12;
 
 fn append(part: &mut Part, run: &AxisRun, range: std::ops::Range<usize>, opt: &IdimOptions) {
-    let sub = AxisRun {
-        t: run.t[range.clone()].to_vec(),
-        x: run.x[range.clone()].to_vec(),
-        force: run.force[range].to_vec(),
-    };
+    let sub = run.slice(range);
     let p = process(&sub, opt);
     let r = opt.decimation;
     part.q.extend(&p.q);

@@ -1,0 +1,844 @@
+//! The FMI 2.0 C entry points (common and co-simulation API, `fmi2Functions.h`).
+//!
+//! Written by hand rather than with a bindings crate: the maintained Rust FMI crates are
+//! `fmi` (an importer: it loads FMUs, it does not export them) and `fmi-export` (FMI 3.0
+//! only, driven by a derive macro and `cargo-fmi`); FMI 2.0 export needs only these ~35
+//! small functions and five C types, and writing them keeps every unsafe block visible here.
+//!
+//! Rules every function follows:
+//! - its body runs inside [`guard`] (`std::panic::catch_unwind`): a panic becomes
+//!   `fmi2Fatal` (the instance is marked failed), it never unwinds into the importer;
+//! - null pointers are checked before use (`fmi2Error`);
+//! - the logic lives in safe Rust ([`Instance`]); this file only converts pointers to slices
+//!   and results to statuses, logging every failure through the importer's logger.
+//!
+//! Memory: the instance is a `Box` from Rust's allocator (the description declares
+//! `canNotUseMemoryManagementFunctions="true"`), freed by `fmi2FreeInstance`.
+
+#![allow(non_snake_case, non_camel_case_types)]
+
+use crate::description::{guid, MODEL_IDENTIFIER};
+use crate::instance::{Failure, Instance, Phase, Status};
+use std::ffi::{c_char, c_int, c_void, CStr, CString};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+/// `fmi2Status`.
+pub type fmi2Status = c_int;
+/// `fmi2OK`.
+pub const FMI2_OK: fmi2Status = 0;
+/// `fmi2Warning`.
+pub const FMI2_WARNING: fmi2Status = 1;
+/// `fmi2Discard`.
+pub const FMI2_DISCARD: fmi2Status = 2;
+/// `fmi2Error`.
+pub const FMI2_ERROR: fmi2Status = 3;
+/// `fmi2Fatal`.
+pub const FMI2_FATAL: fmi2Status = 4;
+/// `fmi2CoSimulation` (`fmi2Type`).
+pub const FMI2_COSIMULATION: c_int = 1;
+
+/// `fmi2Component`: an opaque pointer to an [`Fmu`].
+pub type fmi2Component = *mut c_void;
+/// `fmi2ComponentEnvironment`: the importer's pointer, passed back to the logger.
+pub type fmi2ComponentEnvironment = *mut c_void;
+/// `fmi2FMUstate` (not supported).
+pub type fmi2FMUstate = *mut c_void;
+/// `fmi2ValueReference`.
+pub type fmi2ValueReference = u32;
+/// `fmi2Real`.
+pub type fmi2Real = f64;
+/// `fmi2Integer`.
+pub type fmi2Integer = c_int;
+/// `fmi2Boolean`.
+pub type fmi2Boolean = c_int;
+/// `fmi2String`.
+pub type fmi2String = *const c_char;
+/// `fmi2Byte`.
+pub type fmi2Byte = c_char;
+/// `fmi2StatusKind`.
+pub type fmi2StatusKind = c_int;
+
+/// `fmi2CallbackLogger`: `(env, instanceName, status, category, message, ...)`; `message` is
+/// a printf format (this FMU escapes `%` as `%%` and passes no arguments).
+pub type fmi2CallbackLogger = unsafe extern "C" fn(
+    fmi2ComponentEnvironment,
+    fmi2String,
+    fmi2Status,
+    fmi2String,
+    fmi2String,
+    ...
+);
+
+/// `fmi2CallbackFunctions` (copied at instantiation; only the logger and the environment
+/// are used).
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct fmi2CallbackFunctions {
+    /// Logger (may be null: then nothing is logged).
+    pub logger: Option<fmi2CallbackLogger>,
+    /// `allocateMemory` (unused).
+    pub allocate_memory: Option<unsafe extern "C" fn(usize, usize) -> *mut c_void>,
+    /// `freeMemory` (unused).
+    pub free_memory: Option<unsafe extern "C" fn(*mut c_void)>,
+    /// `stepFinished` (unused: the FMU never returns `fmi2Pending`).
+    pub step_finished: Option<unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2Status)>,
+    /// The importer's environment pointer.
+    pub component_environment: fmi2ComponentEnvironment,
+}
+
+/// What `fmi2Component` points to.
+pub struct Fmu {
+    instance: Instance,
+    name: CString,
+    logger: Option<fmi2CallbackLogger>,
+    env: fmi2ComponentEnvironment,
+    logging_on: bool,
+}
+
+impl Fmu {
+    /// Sends one message to the importer's logger (errors always, other statuses only with
+    /// debug logging on).
+    fn log(&self, status: fmi2Status, category: &str, message: &str) {
+        if status == FMI2_OK && !self.logging_on {
+            return;
+        }
+        let Some(logger) = self.logger else { return };
+        let text = CString::new(message.replace('%', "%%").replace('\0', " ")).unwrap_or_default();
+        let category = CString::new(category).unwrap_or_default();
+        // SAFETY: the logger is the importer's function of the FMI signature, given at
+        // instantiation; all string arguments are valid NUL-terminated strings alive for the
+        // call, and the message contains no unescaped `%`, so no variadic argument is read.
+        unsafe {
+            logger(
+                self.env,
+                self.name.as_ptr(),
+                status,
+                category.as_ptr(),
+                text.as_ptr(),
+            )
+        };
+    }
+
+    fn report(&self, r: Result<(), Failure>) -> fmi2Status {
+        match r {
+            Ok(()) => FMI2_OK,
+            Err(f) => {
+                let status = match f.status {
+                    Status::Warning => FMI2_WARNING,
+                    Status::Discard => FMI2_DISCARD,
+                    Status::Error => FMI2_ERROR,
+                    Status::Fatal => FMI2_FATAL,
+                };
+                self.log(status, "logStatusError", &f.message);
+                status
+            }
+        }
+    }
+}
+
+/// Runs `body` on the instance behind `c`, catching panics. Null `c` is `fmi2Error`.
+///
+/// # Safety
+/// `c` is null or a pointer returned by [`fmi2Instantiate`] and not yet freed, used by one
+/// thread at a time (FMI 2.0 rule).
+unsafe fn guard(c: fmi2Component, body: impl FnOnce(&mut Fmu) -> fmi2Status) -> fmi2Status {
+    if c.is_null() {
+        return FMI2_ERROR;
+    }
+    // SAFETY: by the contract above `c` came from `Box::into_raw` in `fmi2Instantiate` and
+    // is not aliased during the call.
+    let fmu = unsafe { &mut *(c as *mut Fmu) };
+    match catch_unwind(AssertUnwindSafe(|| body(fmu))) {
+        Ok(status) => status,
+        Err(_) => {
+            // The body panicked: the instance may be half-updated, so it is not used again.
+            let _ = catch_unwind(AssertUnwindSafe(|| {
+                fmu.instance.poison();
+                fmu.log(
+                    FMI2_FATAL,
+                    "logStatusFatal",
+                    "internal panic caught; instance unusable",
+                );
+            }));
+            FMI2_FATAL
+        }
+    }
+}
+
+/// A slice from an FMI array argument; `None` if the pointer is null while `n > 0`.
+///
+/// # Safety
+/// If non-null, `p` points to `n` valid, initialised elements not mutated during the call.
+unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
+    if n == 0 {
+        return Some(&[]);
+    }
+    if p.is_null() {
+        return None;
+    }
+    // SAFETY: non-null, and by the contract above valid for `n` reads.
+    Some(unsafe { std::slice::from_raw_parts(p, n) })
+}
+
+/// A mutable slice from an FMI output array argument; `None` if null while `n > 0`.
+///
+/// # Safety
+/// If non-null, `p` points to `n` writable elements not otherwise accessed during the call.
+unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
+    if n == 0 {
+        return Some(&mut []);
+    }
+    if p.is_null() {
+        return None;
+    }
+    // SAFETY: non-null, and by the contract above valid and exclusive for `n` writes.
+    Some(unsafe { std::slice::from_raw_parts_mut(p, n) })
+}
+
+fn null_argument(fmu: &Fmu, what: &str) -> fmi2Status {
+    fmu.report(Err(Failure {
+        status: Status::Error,
+        message: format!("{what}: null pointer argument"),
+    }))
+}
+
+fn unsupported(fmu: &Fmu, what: &str) -> fmi2Status {
+    fmu.report(Err(Failure {
+        status: Status::Error,
+        message: format!(
+            "{what} is not supported by this FMU (see modelDescription.xml capability flags)"
+        ),
+    }))
+}
+
+/// `fmi2GetTypesPlatform`: `"default"`.
+#[no_mangle]
+pub extern "C" fn fmi2GetTypesPlatform() -> *const c_char {
+    c"default".as_ptr()
+}
+
+/// `fmi2GetVersion`: `"2.0"`.
+#[no_mangle]
+pub extern "C" fn fmi2GetVersion() -> *const c_char {
+    c"2.0".as_ptr()
+}
+
+/// Reads a C string argument; `None` for null or non-UTF-8.
+///
+/// # Safety
+/// `p` is null or a valid NUL-terminated string.
+unsafe fn text(p: fmi2String) -> Option<String> {
+    if p.is_null() {
+        return None;
+    }
+    // SAFETY: non-null and NUL-terminated by the contract above.
+    unsafe { CStr::from_ptr(p) }
+        .to_str()
+        .ok()
+        .map(str::to_owned)
+}
+
+/// `fmi2Instantiate`: checks the type (co-simulation), the GUID and the instance name;
+/// returns null on any error (logged when a logger was given).
+///
+/// # Safety
+/// String arguments are null or NUL-terminated; `functions` is null or points to a valid
+/// `fmi2CallbackFunctions`.
+#[no_mangle]
+pub unsafe extern "C" fn fmi2Instantiate(
+    instance_name: fmi2String,
+    fmu_type: c_int,
+    fmu_guid: fmi2String,
+    _fmu_resource_location: fmi2String,
+    functions: *const fmi2CallbackFunctions,
+    _visible: fmi2Boolean,
+    logging_on: fmi2Boolean,
+) -> fmi2Component {
+    let made = catch_unwind(AssertUnwindSafe(|| {
+        let callbacks = if functions.is_null() {
+            None
+        } else {
+            // SAFETY: non-null and, by the contract, a valid struct; it is copied.
+            Some(unsafe { *functions })
+        };
+        // SAFETY: null or NUL-terminated by the contract.
+        let name = unsafe { text(instance_name) };
+        // SAFETY: as above.
+        let given_guid = unsafe { text(fmu_guid) };
+        let fmu = Fmu {
+            instance: Instance::new(),
+            name: CString::new(name.clone().unwrap_or_else(|| MODEL_IDENTIFIER.into()))
+                .unwrap_or_default(),
+            logger: callbacks.and_then(|c| c.logger),
+            env: callbacks.map_or(std::ptr::null_mut(), |c| c.component_environment),
+            logging_on: logging_on != 0,
+        };
+        let problem = if callbacks.is_none() {
+            Some("fmi2Instantiate: functions is null".to_string())
+        } else if matches!(name.as_deref(), None | Some("")) {
+            Some("fmi2Instantiate: instanceName is null or empty".to_string())
+        } else if fmu_type != FMI2_COSIMULATION {
+            Some(format!(
+                "fmi2Instantiate: this FMU supports co-simulation only (fmuType {fmu_type})"
+            ))
+        } else if given_guid.as_deref() != Some(guid()) {
+            Some(format!(
+                "fmi2Instantiate: GUID {:?} does not match this binary's {}",
+                given_guid.unwrap_or_default(),
+                guid()
+            ))
+        } else {
+            None
+        };
+        match problem {
+            Some(p) => {
+                fmu.log(FMI2_ERROR, "logStatusError", &p);
+                std::ptr::null_mut()
+            }
+            None => Box::into_raw(Box::new(fmu)) as fmi2Component,
+        }
+    }));
+    made.unwrap_or(std::ptr::null_mut())
+}
+
+/// `fmi2FreeInstance` (null is ignored).
+///
+/// # Safety
+/// `c` is null or from [`fmi2Instantiate`], not used afterwards.
+#[no_mangle]
+pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
+    if c.is_null() {
+        return;
+    }
+    let _ = catch_unwind(|| {
+        // SAFETY: `c` came from `Box::into_raw` in `fmi2Instantiate` and is freed once.
+        drop(unsafe { Box::from_raw(c as *mut Fmu) });
+    });
+}
+
+/// `fmi2SetDebugLogging`: switches non-error messages on or off (categories are ignored).
+///
+/// # Safety
+/// See [`guard`].
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetDebugLogging(
+    c: fmi2Component,
+    logging_on: fmi2Boolean,
+    _n_categories: usize,
+    _categories: *const fmi2String,
+) -> fmi2Status {
+    // SAFETY: `c` per this function's contract.
+    unsafe {
+        guard(c, |fmu| {
+            fmu.logging_on = logging_on != 0;
+            FMI2_OK
+        })
+    }
+}
+
+/// `fmi2SetupExperiment`: the start time; tolerance and stop time are not used.
+///
+/// # Safety
+/// See [`guard`].
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetupExperiment(
+    c: fmi2Component,
+    _tolerance_defined: fmi2Boolean,
+    _tolerance: fmi2Real,
+    start_time: fmi2Real,
+    _stop_time_defined: fmi2Boolean,
+    _stop_time: fmi2Real,
+) -> fmi2Status {
+    // SAFETY: `c` per this function's contract.
+    unsafe {
+        guard(c, |fmu| {
+            let r = fmu.instance.setup_experiment(start_time);
+            fmu.report(r)
+        })
+    }
+}
+
+/// `fmi2EnterInitializationMode`.
+///
+/// # Safety
+/// See [`guard`].
+#[no_mangle]
+pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
+    // SAFETY: `c` per this function's contract.
+    unsafe {
+        guard(c, |fmu| {
+            let r = fmu.instance.enter_initialization();
+            fmu.report(r)
+        })
+    }
+}
+
+/// `fmi2ExitInitializationMode`: validates parameters and initial state (the model's error
+/// text goes to the logger).
+///
+/// # Safety
+/// See [`guard`].
+#[no_mangle]
+pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
+    // SAFETY: `c` per this function's contract.
+    unsafe {
+        guard(c, |fmu| {
+            let r = fmu.instance.exit_initialization();
+            fmu.report(r)
+        })
+    }
+}
+
+/// `fmi2Terminate`.
+///
+/// # Safety
+/// See [`guard`].
+#[no_mangle]
+pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
+    // SAFETY: `c` per this function's contract.
+    unsafe {
+        guard(c, |fmu| {
+            let r = fmu.instance.terminate();
+            fmu.report(r)
+        })
+    }
+}
+
+/// `fmi2Reset`: back to the state after instantiation, start values restored.
+///
+/// # Safety
+/// See [`guard`].
+#[no_mangle]
+pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
+    // SAFETY: `c` per this function's contract.
+    unsafe {
+        guard(c, |fmu| {
+            fmu.instance.reset();
+            FMI2_OK
+        })
+    }
+}
+
+/// `fmi2GetReal`.
+///
+/// # Safety
+/// See [`guard`]; `vr` and `value` are null or valid for `nvr` elements.
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetReal(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Real,
+) -> fmi2Status {
+    // SAFETY: `c` per this function's contract.
+    unsafe {
+        guard(c, |fmu| {
+            // SAFETY: valid for `nvr` elements per this function's contract.
+            let (Some(vr), Some(out)) = (slice(vr, nvr), slice_mut(value, nvr)) else {
+                return null_argument(fmu, "fmi2GetReal");
+            };
+            {
+                let r = fmu.instance.get_real(vr, out);
+                fmu.report(r)
+            }
+        })
+    }
+}
+
+/// `fmi2GetInteger`.
+///
+/// # Safety
+/// See [`fmi2GetReal`].
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetInteger(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Integer,
+) -> fmi2Status {
+    // SAFETY: `c` per this function's contract.
+    unsafe {
+        guard(c, |fmu| {
+            // SAFETY: valid for `nvr` elements per this function's contract.
+            let (Some(vr), Some(out)) = (slice(vr, nvr), slice_mut(value, nvr)) else {
+                return null_argument(fmu, "fmi2GetInteger");
+            };
+            {
+                let r = fmu.instance.get_integer(vr, out);
+                fmu.report(r)
+            }
+        })
+    }
+}
+
+/// `fmi2GetBoolean`: the FMU has no Boolean variables, so any value reference is an error.
+///
+/// # Safety
+/// See [`fmi2GetReal`].
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetBoolean(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Boolean,
+) -> fmi2Status {
+    // SAFETY: `c` per this function's contract.
+    unsafe {
+        guard(c, |fmu| {
+            // SAFETY: valid for `nvr` elements per this function's contract.
+            let (Some(vr), Some(_)) = (slice(vr, nvr), slice_mut(value, nvr)) else {
+                return null_argument(fmu, "fmi2GetBoolean");
+            };
+            match vr.first() {
+                None => FMI2_OK,
+                Some(r) => fmu.report(Err(Failure {
+                    status: Status::Error,
+                    message: format!("no Boolean variable with value reference {r}"),
+                })),
+            }
+        })
+    }
+}
+
+/// `fmi2GetString`: no String variables (any value reference is an error).
+///
+/// # Safety
+/// See [`fmi2GetReal`].
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetString(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2String,
+) -> fmi2Status {
+    // SAFETY: `c` per this function's contract.
+    unsafe {
+        guard(c, |fmu| {
+            // SAFETY: valid for `nvr` elements per this function's contract.
+            let (Some(vr), Some(_)) = (slice(vr, nvr), slice_mut(value, nvr)) else {
+                return null_argument(fmu, "fmi2GetString");
+            };
+            match vr.first() {
+                None => FMI2_OK,
+                Some(r) => fmu.report(Err(Failure {
+                    status: Status::Error,
+                    message: format!("no String variable with value reference {r}"),
+                })),
+            }
+        })
+    }
+}
+
+/// `fmi2SetReal`: inputs and parameters (see `Instance::set_real`).
+///
+/// # Safety
+/// See [`guard`]; `vr` and `value` are null or valid for `nvr` elements.
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetReal(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Real,
+) -> fmi2Status {
+    // SAFETY: `c` per this function's contract.
+    unsafe {
+        guard(c, |fmu| {
+            // SAFETY: valid for `nvr` elements per this function's contract.
+            let (Some(vr), Some(v)) = (slice(vr, nvr), slice(value, nvr)) else {
+                return null_argument(fmu, "fmi2SetReal");
+            };
+            {
+                let r = fmu.instance.set_real(vr, v);
+                fmu.report(r)
+            }
+        })
+    }
+}
+
+/// `fmi2SetInteger`: the segment budget.
+///
+/// # Safety
+/// See [`fmi2SetReal`].
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetInteger(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Integer,
+) -> fmi2Status {
+    // SAFETY: `c` per this function's contract.
+    unsafe {
+        guard(c, |fmu| {
+            // SAFETY: valid for `nvr` elements per this function's contract.
+            let (Some(vr), Some(v)) = (slice(vr, nvr), slice(value, nvr)) else {
+                return null_argument(fmu, "fmi2SetInteger");
+            };
+            {
+                let r = fmu.instance.set_integer(vr, v);
+                fmu.report(r)
+            }
+        })
+    }
+}
+
+/// `fmi2SetBoolean`: no Boolean variables (any value reference is an error).
+///
+/// # Safety
+/// See [`fmi2SetReal`].
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetBoolean(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Boolean,
+) -> fmi2Status {
+    // SAFETY: `c` per this function's contract.
+    unsafe {
+        guard(c, |fmu| {
+            // SAFETY: valid for `nvr` elements per this function's contract.
+            let (Some(vr), Some(_)) = (slice(vr, nvr), slice(value, nvr)) else {
+                return null_argument(fmu, "fmi2SetBoolean");
+            };
+            match vr.first() {
+                None => FMI2_OK,
+                Some(r) => fmu.report(Err(Failure {
+                    status: Status::Error,
+                    message: format!("no Boolean variable with value reference {r}"),
+                })),
+            }
+        })
+    }
+}
+
+/// `fmi2SetString`: no String variables (any value reference is an error).
+///
+/// # Safety
+/// See [`fmi2SetReal`].
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetString(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2String,
+) -> fmi2Status {
+    // SAFETY: `c` per this function's contract.
+    unsafe {
+        guard(c, |fmu| {
+            // SAFETY: valid for `nvr` elements per this function's contract.
+            let (Some(vr), Some(_)) = (slice(vr, nvr), slice(value, nvr)) else {
+                return null_argument(fmu, "fmi2SetString");
+            };
+            match vr.first() {
+                None => FMI2_OK,
+                Some(r) => fmu.report(Err(Failure {
+                    status: Status::Error,
+                    message: format!("no String variable with value reference {r}"),
+                })),
+            }
+        })
+    }
+}
+
+/// `fmi2DoStep`: `communicationStepSize` must be a whole multiple of `config.h`.
+///
+/// # Safety
+/// See [`guard`].
+#[no_mangle]
+pub unsafe extern "C" fn fmi2DoStep(
+    c: fmi2Component,
+    current_communication_point: fmi2Real,
+    communication_step_size: fmi2Real,
+    _no_set_fmu_state_prior: fmi2Boolean,
+) -> fmi2Status {
+    // SAFETY: `c` per this function's contract.
+    unsafe {
+        guard(c, |fmu| {
+            let r = fmu
+                .instance
+                .do_step(current_communication_point, communication_step_size);
+            fmu.report(r)
+        })
+    }
+}
+
+/// `fmi2CancelStep`: steps are synchronous, there is nothing to cancel.
+///
+/// # Safety
+/// See [`guard`].
+#[no_mangle]
+pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
+    // SAFETY: `c` per this function's contract.
+    unsafe {
+        guard(c, |fmu| {
+            unsupported(fmu, "fmi2CancelStep (steps are synchronous)")
+        })
+    }
+}
+
+/// `fmi2GetStatus` and friends: only meaningful after `fmi2Pending`, which this FMU never
+/// returns; `fmi2Terminated` is answered (true after a failed step).
+///
+/// # Safety
+/// See [`guard`]; `value` null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetStatus(
+    c: fmi2Component,
+    _kind: fmi2StatusKind,
+    _value: *mut fmi2Status,
+) -> fmi2Status {
+    // SAFETY: `c` per this function's contract.
+    unsafe { guard(c, |_| FMI2_DISCARD) }
+}
+
+/// `fmi2GetRealStatus`: `fmi2LastSuccessfulTime` (2) gives the FMU's time.
+///
+/// # Safety
+/// See [`guard`]; `value` null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetRealStatus(
+    c: fmi2Component,
+    kind: fmi2StatusKind,
+    value: *mut fmi2Real,
+) -> fmi2Status {
+    // SAFETY: `c` per this function's contract.
+    unsafe {
+        guard(c, |fmu| {
+            // SAFETY: null or writable for one element per this function's contract.
+            let Some(out) = slice_mut(value, 1) else {
+                return null_argument(fmu, "fmi2GetRealStatus");
+            };
+            if kind == 2 {
+                out[0] = fmu.instance.time();
+                FMI2_OK
+            } else {
+                FMI2_DISCARD
+            }
+        })
+    }
+}
+
+/// `fmi2GetIntegerStatus`: nothing to report.
+///
+/// # Safety
+/// See [`guard`].
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetIntegerStatus(
+    c: fmi2Component,
+    _kind: fmi2StatusKind,
+    _value: *mut fmi2Integer,
+) -> fmi2Status {
+    // SAFETY: `c` per this function's contract.
+    unsafe { guard(c, |_| FMI2_DISCARD) }
+}
+
+/// `fmi2GetBooleanStatus`: `fmi2Terminated` (3) is true after a failed step.
+///
+/// # Safety
+/// See [`guard`]; `value` null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetBooleanStatus(
+    c: fmi2Component,
+    kind: fmi2StatusKind,
+    value: *mut fmi2Boolean,
+) -> fmi2Status {
+    // SAFETY: `c` per this function's contract.
+    unsafe {
+        guard(c, |fmu| {
+            // SAFETY: null or writable for one element per this function's contract.
+            let Some(out) = slice_mut(value, 1) else {
+                return null_argument(fmu, "fmi2GetBooleanStatus");
+            };
+            if kind == 3 {
+                out[0] = c_int::from(fmu.instance.phase() == Phase::Failed);
+                FMI2_OK
+            } else {
+                FMI2_DISCARD
+            }
+        })
+    }
+}
+
+/// `fmi2GetStringStatus`: nothing to report.
+///
+/// # Safety
+/// See [`guard`].
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetStringStatus(
+    c: fmi2Component,
+    _kind: fmi2StatusKind,
+    _value: *mut fmi2String,
+) -> fmi2Status {
+    // SAFETY: `c` per this function's contract.
+    unsafe { guard(c, |_| FMI2_DISCARD) }
+}
+
+macro_rules! not_supported {
+    ($name:ident ( $($arg:ident : $ty:ty),* )) => {
+        #[doc = concat!("`", stringify!($name), "`: not supported (capability flag false); `fmi2Error`.")]
+        ///
+        /// # Safety
+        /// See [`guard`].
+        #[no_mangle]
+        pub unsafe extern "C" fn $name(c: fmi2Component, $(_: $ty),*) -> fmi2Status {
+            // SAFETY: `c` per this function's contract.
+            unsafe { guard(c, |fmu| unsupported(fmu, stringify!($name))) }
+        }
+    };
+}
+
+not_supported!(fmi2GetFMUstate(state: *mut fmi2FMUstate));
+not_supported!(fmi2SetFMUstate(state: fmi2FMUstate));
+not_supported!(fmi2FreeFMUstate(state: *mut fmi2FMUstate));
+not_supported!(fmi2SerializedFMUstateSize(state: fmi2FMUstate, size: *mut usize));
+not_supported!(fmi2SerializeFMUstate(state: fmi2FMUstate, bytes: *mut fmi2Byte, size: usize));
+not_supported!(fmi2DeSerializeFMUstate(bytes: *const fmi2Byte, size: usize, state: *mut fmi2FMUstate));
+not_supported!(fmi2GetDirectionalDerivative(
+    unknown: *const fmi2ValueReference,
+    n_unknown: usize,
+    known: *const fmi2ValueReference,
+    n_known: usize,
+    dv_known: *const fmi2Real,
+    dv_unknown: *mut fmi2Real
+));
+not_supported!(fmi2SetRealInputDerivatives(
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    order: *const fmi2Integer,
+    value: *const fmi2Real
+));
+not_supported!(fmi2GetRealOutputDerivatives(
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    order: *const fmi2Integer,
+    value: *mut fmi2Real
+));
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::panic, clippy::undocumented_unsafe_blocks)]
+    use super::*;
+
+    #[test]
+    fn a_panic_in_an_entry_point_becomes_fatal_and_the_instance_is_unusable() {
+        let cb = fmi2CallbackFunctions {
+            logger: None,
+            allocate_memory: None,
+            free_memory: None,
+            step_finished: None,
+            component_environment: std::ptr::null_mut(),
+        };
+        let g = CString::new(guid()).unwrap_or_default();
+        // Pointers below are valid for each call; `c` is freed once at the end.
+        let c =
+            unsafe { fmi2Instantiate(c"t".as_ptr(), 1, g.as_ptr(), std::ptr::null(), &cb, 0, 0) };
+        assert!(!c.is_null());
+        unsafe {
+            assert_eq!(fmi2EnterInitializationMode(c), FMI2_OK);
+            assert_eq!(fmi2ExitInitializationMode(c), FMI2_OK);
+            assert_eq!(guard(c, |_| panic!("injected")), FMI2_FATAL);
+            assert_eq!(fmi2DoStep(c, 0.0, 1e-3, 0), FMI2_ERROR);
+            assert_eq!(fmi2Reset(c), FMI2_OK);
+            fmi2FreeInstance(c);
+        }
+    }
+}

@@ -1,0 +1,621 @@
+//! The FMU's variables: one table, read by the FMU (get/set by value reference) and by the
+//! packer (`modelDescription.xml`, `documentation/index.html`), so the two cannot disagree.
+//!
+//! Names of parameters are the model's own field paths (`payload_mass`, `x.viscous_pos`,
+//! `rope.dry_neg[0]`, `config.h`, `state.q[3]`), so a validation error of the model
+//! (`crane_model::Error::field`) names the FMU variable to fix. Names follow FMI 2.0's
+//! `structured` naming convention.
+
+use crane_model::{AxisParams, Params, State};
+
+/// FMI 2.0 causality of a variable.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Causality {
+    /// Set by the importer before (fixed) or during (tunable) the simulation.
+    Parameter,
+    /// Set by the importer before every step (held over the step, zero-order hold).
+    Input,
+    /// Computed by the FMU.
+    Output,
+}
+
+/// FMI 2.0 variability of a variable.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Variability {
+    /// Set before initialisation only.
+    Fixed,
+    /// May also change between steps.
+    Tunable,
+    /// Changes only at communication points (integer outputs).
+    Discrete,
+    /// A real signal.
+    Continuous,
+}
+
+/// FMI 2.0 base type of a variable.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// `fmi2Real` (f64).
+    Real,
+    /// `fmi2Integer` (i32).
+    Integer,
+}
+
+/// What a value reference stands for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Slot {
+    /// Input voltage of axis 0 (X), 1 (Y), 2 (rope) [V].
+    Input(usize),
+    /// Model parameter number `i` in [`PARAMS`] order.
+    Param(usize),
+    /// The model's fixed step `h` [s].
+    Step,
+    /// Initial position `q[i]`.
+    InitQ(usize),
+    /// Initial velocity `qd[i]`.
+    InitQd(usize),
+    /// Segment budget of a step (integer, `1..=8`).
+    SegmentBudget,
+    /// Position `q[i]`.
+    Q(usize),
+    /// Velocity `qd[i]`.
+    Qd(usize),
+    /// Friction force of drive axis `i` [N].
+    Friction(usize),
+    /// Rope tension [N].
+    Tension,
+    /// Payload position component `i` (x, y, z) [m].
+    Payload(usize),
+    /// Mode of drive axis `i` (integer: -1 negative, 0 stopped, 1 positive).
+    Mode(usize),
+}
+
+/// One variable of `modelDescription.xml`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Variable {
+    /// Name (FMI structured naming).
+    pub name: &'static str,
+    /// Value reference (unique over all variables).
+    pub vr: u32,
+    /// Base type.
+    pub kind: Kind,
+    /// Causality.
+    pub causality: Causality,
+    /// Variability.
+    pub variability: Variability,
+    /// Unit (declared in [`UNITS`]), if any.
+    pub unit: Option<&'static str>,
+    /// Human description.
+    pub description: &'static str,
+    /// What it stands for.
+    pub slot: Slot,
+}
+
+/// Units used by the variables, with their SI base-unit exponents
+/// `(name, [kg, m, s, A, rad])`.
+pub const UNITS: &[(&str, [i8; 5])] = &[
+    ("V", [1, 2, -3, -1, 0]),
+    ("m", [0, 1, 0, 0, 0]),
+    ("m/s", [0, 1, -1, 0, 0]),
+    ("rad", [0, 0, 0, 0, 1]),
+    ("rad/s", [0, 0, -1, 0, 1]),
+    ("s", [0, 0, 1, 0, 0]),
+    ("kg", [1, 0, 0, 0, 0]),
+    ("m/s2", [0, 1, -2, 0, 0]),
+    ("kg.m2/s", [1, 2, -1, 0, 0]),
+    ("N", [1, 1, -2, 0, 0]),
+    ("N/V", [0, -1, 1, 1, 0]),
+    ("N.s/m", [1, 0, -1, 0, 0]),
+    ("N/m", [1, 0, -2, 0, 0]),
+    ("N/m2", [1, -1, -2, 0, 0]),
+    ("N/m3", [1, -2, -2, 0, 0]),
+    ("N/m4", [1, -3, -2, 0, 0]),
+];
+
+/// Number of model parameters (fields of [`Params`]).
+pub const N_PARAMS: usize = 6 + 3 * 16;
+
+/// Model parameters in [`Slot::Param`] order: `(name, unit, description)`.
+pub const PARAMS: [(&str, &str, &str); N_PARAMS] = {
+    macro_rules! axis {
+        ($a:literal, $what:literal) => {
+            [
+                (
+                    concat!($a, ".inertia"),
+                    "kg",
+                    concat!("reflected motor inertia Jbar of ", $what, " (>= 0)"),
+                ),
+                (
+                    concat!($a, ".gain"),
+                    "N/V",
+                    concat!("motor gain K of ", $what, ": drive force K u (> 0)"),
+                ),
+                (
+                    concat!($a, ".viscous_pos"),
+                    "N.s/m",
+                    concat!("viscous coefficient Dbar+ of ", $what, " (>= 0)"),
+                ),
+                (
+                    concat!($a, ".viscous_neg"),
+                    "N.s/m",
+                    concat!("viscous coefficient Dbar- of ", $what, " (>= 0)"),
+                ),
+                (
+                    concat!($a, ".dry_pos[0]"),
+                    "N",
+                    concat!("dry friction Cbar+(p) of ", $what, ", coefficient c0"),
+                ),
+                (
+                    concat!($a, ".dry_pos[1]"),
+                    "N/m",
+                    concat!(
+                        "dry friction Cbar+(p) of ",
+                        $what,
+                        ", coefficient c1 (of p)"
+                    ),
+                ),
+                (
+                    concat!($a, ".dry_pos[2]"),
+                    "N/m2",
+                    concat!(
+                        "dry friction Cbar+(p) of ",
+                        $what,
+                        ", coefficient c2 (of p^2)"
+                    ),
+                ),
+                (
+                    concat!($a, ".dry_pos[3]"),
+                    "N/m3",
+                    concat!(
+                        "dry friction Cbar+(p) of ",
+                        $what,
+                        ", coefficient c3 (of p^3)"
+                    ),
+                ),
+                (
+                    concat!($a, ".dry_pos[4]"),
+                    "N/m4",
+                    concat!(
+                        "dry friction Cbar+(p) of ",
+                        $what,
+                        ", coefficient c4 (of p^4)"
+                    ),
+                ),
+                (
+                    concat!($a, ".dry_neg[0]"),
+                    "N",
+                    concat!("dry friction Cbar-(p) of ", $what, ", coefficient c0"),
+                ),
+                (
+                    concat!($a, ".dry_neg[1]"),
+                    "N/m",
+                    concat!(
+                        "dry friction Cbar-(p) of ",
+                        $what,
+                        ", coefficient c1 (of p)"
+                    ),
+                ),
+                (
+                    concat!($a, ".dry_neg[2]"),
+                    "N/m2",
+                    concat!(
+                        "dry friction Cbar-(p) of ",
+                        $what,
+                        ", coefficient c2 (of p^2)"
+                    ),
+                ),
+                (
+                    concat!($a, ".dry_neg[3]"),
+                    "N/m3",
+                    concat!(
+                        "dry friction Cbar-(p) of ",
+                        $what,
+                        ", coefficient c3 (of p^3)"
+                    ),
+                ),
+                (
+                    concat!($a, ".dry_neg[4]"),
+                    "N/m4",
+                    concat!(
+                        "dry friction Cbar-(p) of ",
+                        $what,
+                        ", coefficient c4 (of p^4)"
+                    ),
+                ),
+                (
+                    concat!($a, ".min"),
+                    "m",
+                    concat!("lower position limit of ", $what),
+                ),
+                (
+                    concat!($a, ".max"),
+                    "m",
+                    concat!("upper position limit of ", $what, " (> min)"),
+                ),
+            ]
+        };
+    }
+    let head = [
+        ("payload_mass", "kg", "payload mass m_p (> 0)"),
+        ("trolley_mass", "kg", "trolley mass m_t (> 0)"),
+        ("rail_mass", "kg", "rail mass m_r (>= 0)"),
+        ("gravity", "m/s2", "gravity g (>= 0)"),
+        ("damping_alpha", "kg.m2/s", "swing damping D_alpha (>= 0)"),
+        ("damping_beta", "kg.m2/s", "swing damping D_beta (>= 0)"),
+    ];
+    let x = axis!("x", "the X axis (rail)");
+    let y = axis!("y", "the Y axis (trolley)");
+    let l = axis!("rope", "the rope axis (positive lowers the payload)");
+    let mut out = [("", "", ""); N_PARAMS];
+    let mut i = 0;
+    while i < 6 {
+        out[i] = head[i];
+        i += 1;
+    }
+    let mut k = 0;
+    while k < 16 {
+        out[6 + k] = x[k];
+        out[22 + k] = y[k];
+        out[38 + k] = l[k];
+        k += 1;
+    }
+    out
+};
+
+/// Mutable references to the fields of one axis, in [`PARAMS`] order.
+fn axis_slots(a: &mut AxisParams) -> [&mut f64; 16] {
+    let [p0, p1, p2, p3, p4] = &mut a.dry_pos;
+    let [n0, n1, n2, n3, n4] = &mut a.dry_neg;
+    [
+        &mut a.inertia,
+        &mut a.gain,
+        &mut a.viscous_pos,
+        &mut a.viscous_neg,
+        p0,
+        p1,
+        p2,
+        p3,
+        p4,
+        n0,
+        n1,
+        n2,
+        n3,
+        n4,
+        &mut a.min,
+        &mut a.max,
+    ]
+}
+
+/// Mutable reference to model parameter `i` ([`PARAMS`] order), `None` past the end.
+pub fn param_mut(p: &mut Params, i: usize) -> Option<&mut f64> {
+    match i {
+        0 => Some(&mut p.payload_mass),
+        1 => Some(&mut p.trolley_mass),
+        2 => Some(&mut p.rail_mass),
+        3 => Some(&mut p.gravity),
+        4 => Some(&mut p.damping_alpha),
+        5 => Some(&mut p.damping_beta),
+        6..=21 => axis_slots(&mut p.x).into_iter().nth(i - 6),
+        22..=37 => axis_slots(&mut p.y).into_iter().nth(i - 22),
+        38..=53 => axis_slots(&mut p.rope).into_iter().nth(i - 38),
+        _ => None,
+    }
+}
+
+/// Model parameter `i` ([`PARAMS`] order), `None` past the end.
+pub fn param(p: &Params, i: usize) -> Option<f64> {
+    let mut copy = *p;
+    param_mut(&mut copy, i).map(|v| *v)
+}
+
+/// Everything the importer can set before initialisation: model parameters, step, initial
+/// state and segment budget. `Default` gives the start values of `modelDescription.xml`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    /// Model parameters (start values: `Params::default()`).
+    pub params: Params,
+    /// Model step `h` [s] (start 1 ms).
+    pub h: f64,
+    /// Initial state (start: `q = [0.25, 0.3, 0.35, pi/2, 0]`, at rest; the default of
+    /// `crane simulate`).
+    pub init: State<f64>,
+    /// Segment budget of a step (start 8 = `crane_model::MAX_SEGMENTS`).
+    pub segment_budget: i32,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            params: Params::default(),
+            h: crane_model::Config::default().h,
+            init: State {
+                q: [0.25, 0.3, 0.35, core::f64::consts::FRAC_PI_2, 0.0],
+                qd: [0.0; 5],
+            },
+            segment_budget: crane_model::MAX_SEGMENTS as i32,
+        }
+    }
+}
+
+/// Value references: inputs 0..3, outputs from 100, integer outputs from 200, model
+/// parameters from 1000, step 1100, initial state 1101..1110, segment budget 1200.
+const VR_PARAM: u32 = 1000;
+
+const Q_NAMES: [&str; 5] = ["q.x", "q.y", "q.l", "q.alpha", "q.beta"];
+const QD_NAMES: [&str; 5] = ["qd.x", "qd.y", "qd.l", "qd.alpha", "qd.beta"];
+const Q_UNITS: [&str; 5] = ["m", "m", "m", "rad", "rad"];
+const QD_UNITS: [&str; 5] = ["m/s", "m/s", "m/s", "rad/s", "rad/s"];
+const Q_DESC: [&str; 5] = [
+    "rail position X",
+    "trolley position Y",
+    "rope length L",
+    "swing angle alpha (pi/2 hanging straight down)",
+    "swing angle beta (0 hanging straight down)",
+];
+const QD_DESC: [&str; 5] = [
+    "rail velocity dX/dt",
+    "trolley velocity dY/dt",
+    "rope velocity dL/dt (positive lowers the payload)",
+    "swing rate dalpha/dt",
+    "swing rate dbeta/dt",
+];
+const INIT_Q: [&str; 5] = [
+    "state.q[0]",
+    "state.q[1]",
+    "state.q[2]",
+    "state.q[3]",
+    "state.q[4]",
+];
+const INIT_QD: [&str; 5] = [
+    "state.qd[0]",
+    "state.qd[1]",
+    "state.qd[2]",
+    "state.qd[3]",
+    "state.qd[4]",
+];
+const INIT_Q_DESC: [&str; 5] = [
+    "initial rail position X",
+    "initial trolley position Y",
+    "initial rope length L",
+    "initial swing angle alpha",
+    "initial swing angle beta",
+];
+const INIT_QD_DESC: [&str; 5] = [
+    "initial rail velocity",
+    "initial trolley velocity",
+    "initial rope velocity",
+    "initial swing rate alpha",
+    "initial swing rate beta",
+];
+
+/// All variables, in `modelDescription.xml` order (its 1-based `index` is position + 1).
+pub fn all() -> Vec<Variable> {
+    use Causality as C;
+    use Variability as V;
+    let real = |name, vr, causality, variability, unit, description, slot| Variable {
+        name,
+        vr,
+        kind: Kind::Real,
+        causality,
+        variability,
+        unit: Some(unit),
+        description,
+        slot,
+    };
+    let mut v = Vec::with_capacity(100);
+    for (i, (name, desc)) in [
+        ("u_x", "input voltage of the X drive (saturated to +-12 V)"),
+        ("u_y", "input voltage of the Y drive (saturated to +-12 V)"),
+        (
+            "u_l",
+            "input voltage of the rope drive (saturated to +-12 V)",
+        ),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        v.push(real(
+            name,
+            i as u32,
+            C::Input,
+            V::Continuous,
+            "V",
+            desc,
+            Slot::Input(i),
+        ));
+    }
+    for i in 0..5 {
+        v.push(real(
+            Q_NAMES[i],
+            100 + i as u32,
+            C::Output,
+            V::Continuous,
+            Q_UNITS[i],
+            Q_DESC[i],
+            Slot::Q(i),
+        ));
+    }
+    for i in 0..5 {
+        v.push(real(
+            QD_NAMES[i],
+            105 + i as u32,
+            C::Output,
+            V::Continuous,
+            QD_UNITS[i],
+            QD_DESC[i],
+            Slot::Qd(i),
+        ));
+    }
+    for (i, (name, desc)) in [
+        ("friction.x", "friction force of X: opposing motion when moving, the holding force when stopped"),
+        ("friction.y", "friction force of Y: opposing motion when moving, the holding force when stopped"),
+        ("friction.l", "friction force of the rope: opposing motion when moving, the holding force when stopped"),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        v.push(real(name, 110 + i as u32, C::Output, V::Continuous, "N", desc, Slot::Friction(i)));
+    }
+    v.push(real(
+        "tension",
+        113,
+        C::Output,
+        V::Continuous,
+        "N",
+        "rope tension (positive pulls)",
+        Slot::Tension,
+    ));
+    for (i, (name, desc)) in [
+        ("payload.x", "payload position x"),
+        ("payload.y", "payload position y"),
+        (
+            "payload.z",
+            "payload position z (up; hanging payloads have z < 0)",
+        ),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        v.push(real(
+            name,
+            114 + i as u32,
+            C::Output,
+            V::Continuous,
+            "m",
+            desc,
+            Slot::Payload(i),
+        ));
+    }
+    for (i, name) in ["mode.x", "mode.y", "mode.l"].into_iter().enumerate() {
+        v.push(Variable {
+            name,
+            vr: 200 + i as u32,
+            kind: Kind::Integer,
+            causality: C::Output,
+            variability: V::Discrete,
+            unit: None,
+            description: "mode of the drive axis: -1 moving negative, 0 stopped (exact sticking), 1 moving positive",
+            slot: Slot::Mode(i),
+        });
+    }
+    for (i, (name, unit, desc)) in PARAMS.iter().enumerate() {
+        v.push(real(
+            name,
+            VR_PARAM + i as u32,
+            C::Parameter,
+            V::Tunable,
+            unit,
+            desc,
+            Slot::Param(i),
+        ));
+    }
+    v.push(real(
+        "config.h",
+        1100,
+        C::Parameter,
+        V::Fixed,
+        "s",
+        "fixed model step h (> 0); every communication step must be a whole multiple of it",
+        Slot::Step,
+    ));
+    for i in 0..5 {
+        v.push(real(
+            INIT_Q[i],
+            1101 + i as u32,
+            C::Parameter,
+            V::Fixed,
+            Q_UNITS[i],
+            INIT_Q_DESC[i],
+            Slot::InitQ(i),
+        ));
+    }
+    for i in 0..5 {
+        v.push(real(
+            INIT_QD[i],
+            1106 + i as u32,
+            C::Parameter,
+            V::Fixed,
+            QD_UNITS[i],
+            INIT_QD_DESC[i],
+            Slot::InitQd(i),
+        ));
+    }
+    v.push(Variable {
+        name: "config.segment_budget",
+        vr: 1200,
+        kind: Kind::Integer,
+        causality: C::Parameter,
+        variability: V::Fixed,
+        unit: None,
+        description: "integration segments one step may use (1..=8): a real-time bound on the work of a step",
+        slot: Slot::SegmentBudget,
+    });
+    v
+}
+
+/// The variable table, built once per process and shared by every instance.
+pub fn table() -> &'static [Variable] {
+    static TABLE: std::sync::OnceLock<Vec<Variable>> = std::sync::OnceLock::new();
+    TABLE.get_or_init(all)
+}
+
+/// The variable with value reference `vr` and base type `kind`, if any.
+pub fn lookup(vars: &[Variable], kind: Kind, vr: u32) -> Option<&Variable> {
+    vars.iter().find(|v| v.vr == vr && v.kind == kind)
+}
+
+/// Start value of a parameter or input as `modelDescription.xml` declares it (`None` for
+/// outputs, which are calculated).
+pub fn start(s: &Settings, slot: Slot) -> Option<f64> {
+    match slot {
+        Slot::Input(_) => Some(0.0),
+        Slot::Param(i) => param(&s.params, i),
+        Slot::Step => Some(s.h),
+        Slot::InitQ(i) => s.init.q.get(i).copied(),
+        Slot::InitQd(i) => s.init.qd.get(i).copied(),
+        Slot::SegmentBudget => Some(f64::from(s.segment_budget)),
+        _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_and_value_references_are_unique() {
+        let v = all();
+        for (i, a) in v.iter().enumerate() {
+            for b in &v[i + 1..] {
+                assert_ne!(a.name, b.name);
+                assert_ne!(a.vr, b.vr, "{} and {}", a.name, b.name);
+            }
+            if let Some(u) = a.unit {
+                assert!(UNITS.iter().any(|(n, _)| *n == u), "unit {u} of {}", a.name);
+            }
+        }
+    }
+
+    #[test]
+    fn every_param_slot_is_a_distinct_field() {
+        // Setting parameter i to a marker changes exactly one field: the slots cover all
+        // 54 fields once.
+        let base = Params::default();
+        for i in 0..N_PARAMS {
+            let mut p = base;
+            *param_mut(&mut p, i).unwrap() = 12345.5;
+            for j in 0..N_PARAMS {
+                let v = param(&p, j).unwrap();
+                assert_eq!(v == 12345.5, i == j, "param {i} vs {j}");
+            }
+        }
+        assert!(param(&base, N_PARAMS).is_none());
+        // Field names match the model's own error paths.
+        let mut p = base;
+        p.x.viscous_pos = -1.0;
+        assert_eq!(p.validate().unwrap_err().field, PARAMS[6 + 2].0);
+        let mut p = base;
+        p.rope.dry_neg[0] = f64::NAN;
+        assert_eq!(p.validate().unwrap_err().field, PARAMS[38 + 9].0);
+    }
+}

@@ -1,0 +1,292 @@
+//! The C entry points called in-process, as an importer would: every state component
+//! (positions and velocities), mode, friction force, tension and payload coordinate equals the
+//! model's own run bit for bit; null pointers and bad arguments give error statuses.
+//!
+//! (`fmu/tests/test_fmu.py` does the same through FMPy and the packed `crane.fmu`, against
+//! `crane simulate`, whose CSV has no velocities: the velocities are compared here.)
+
+// Every unsafe call here passes pointers that are null or valid for the call.
+#![allow(clippy::undocumented_unsafe_blocks)]
+
+use crane_fmu::description::guid;
+use crane_fmu::ffi::*;
+use crane_model::{Config, Crane, Mode, Params, State};
+use std::ffi::CString;
+use std::ptr::{null, null_mut};
+
+fn callbacks() -> fmi2CallbackFunctions {
+    fmi2CallbackFunctions {
+        logger: None,
+        allocate_memory: None,
+        free_memory: None,
+        step_finished: None,
+        component_environment: null_mut(),
+    }
+}
+
+fn instantiate(cb: &fmi2CallbackFunctions) -> fmi2Component {
+    let g = CString::new(guid()).unwrap();
+    // SAFETY (whole test): every pointer passed is null or valid for the call.
+    unsafe { fmi2Instantiate(c"crane".as_ptr(), 1, g.as_ptr(), null(), cb, 0, 0) }
+}
+
+fn get(c: fmi2Component, vr: &[u32]) -> Vec<f64> {
+    let mut out = vec![0.0; vr.len()];
+    let s = unsafe { fmi2GetReal(c, vr.as_ptr(), vr.len(), out.as_mut_ptr()) };
+    assert_eq!(s, FMI2_OK);
+    out
+}
+
+fn modes(c: fmi2Component) -> Vec<i32> {
+    let vr = [200, 201, 202];
+    let mut out = vec![9; 3];
+    assert_eq!(
+        unsafe { fmi2GetInteger(c, vr.as_ptr(), 3, out.as_mut_ptr()) },
+        FMI2_OK
+    );
+    out
+}
+
+/// Multisine voltages plus steps (moves and stops every axis), as `crane simulate` computes
+/// inputs: sums of `offset + amplitude sin(2 pi f t)`, clamped to +-12 V.
+fn input(t: f64) -> [f64; 3] {
+    let s = |a: f64, f: f64| a * (2.0 * std::f64::consts::PI * f * t).sin();
+    let mut u = [
+        s(1.5, 0.404) + s(1.5, 0.942),
+        s(1.5, 0.314) + s(1.5, 0.523),
+        s(0.5, 0.406),
+    ];
+    if (1.0..1.5).contains(&t) {
+        u[2] -= 2.0;
+    }
+    if (3.0..3.5).contains(&t) {
+        u[2] += 2.5;
+    }
+    if (2.0..2.4).contains(&t) {
+        u[0] += 3.0;
+    }
+    u
+}
+
+fn code(m: Mode) -> i32 {
+    match m {
+        Mode::Negative => -1,
+        Mode::Stopped => 0,
+        Mode::Positive => 1,
+    }
+}
+
+/// Runs 4 s through the C ABI with communication step `k h` and compares with the model.
+fn compare(k: usize) {
+    let cb = callbacks();
+    let c = instantiate(&cb);
+    assert!(!c.is_null());
+    let payload = 0.064;
+    unsafe {
+        assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), FMI2_OK);
+        assert_eq!(fmi2EnterInitializationMode(c), FMI2_OK);
+        assert_eq!(
+            fmi2SetReal(c, [1000].as_ptr(), 1, [payload].as_ptr()),
+            FMI2_OK
+        );
+        assert_eq!(fmi2ExitInitializationMode(c), FMI2_OK);
+    }
+    let params = Params {
+        payload_mass: payload,
+        ..Params::default()
+    };
+    let init = State {
+        q: [0.25, 0.3, 0.35, std::f64::consts::FRAC_PI_2, 0.0],
+        qd: [0.0; 5],
+    };
+    let mut crane: Crane = Crane::new(&params, Config::default(), init).unwrap();
+    let h = 1e-3;
+    let outs: Vec<u32> = (100..117).collect();
+    let mut seen = [[false; 3]; 3];
+    let n = 4000 / k;
+    for j in 0..n {
+        let t = (j * k) as f64 * h;
+        let u = input(t);
+        unsafe {
+            assert_eq!(fmi2SetReal(c, [0, 1, 2].as_ptr(), 3, u.as_ptr()), FMI2_OK);
+            assert_eq!(fmi2DoStep(c, t, k as f64 * h, 1), FMI2_OK, "t = {t}");
+        }
+        for _ in 0..k {
+            crane.step(u).unwrap();
+        }
+        let s = crane.state();
+        let o = crane.output().unwrap();
+        let want: Vec<f64> =
+            s.q.iter()
+                .chain(&s.qd)
+                .chain(&o.friction)
+                .chain([&o.tension])
+                .chain(&o.payload)
+                .copied()
+                .collect();
+        let got = get(c, &outs);
+        for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+            assert_eq!(
+                g.to_bits(),
+                w.to_bits(),
+                "step {j}, output vr {}: {g} vs {w}",
+                100 + i
+            );
+        }
+        let m = crane.modes();
+        assert_eq!(modes(c), m.map(code).to_vec());
+        for (a, mode) in m.iter().enumerate() {
+            seen[a][(code(*mode) + 1) as usize] = true;
+        }
+    }
+    // Every axis was stopped and moved in both directions at some point (the automaton ran).
+    for (a, s) in seen.iter().enumerate() {
+        assert!(s.iter().all(|x| *x), "axis {a}: modes seen {s:?}");
+    }
+    unsafe {
+        assert_eq!(fmi2Terminate(c), FMI2_OK);
+        fmi2FreeInstance(c);
+    }
+}
+
+#[test]
+fn every_state_equals_the_model_bit_for_bit_step_h() {
+    compare(1);
+}
+
+#[test]
+fn every_state_equals_the_model_bit_for_bit_step_5h() {
+    compare(5);
+}
+
+#[test]
+fn null_pointers_and_bad_arguments_are_errors_not_crashes() {
+    let cb = callbacks();
+    let g = CString::new(guid()).unwrap();
+    unsafe {
+        // Instantiate: null callbacks, null/empty name, model exchange, wrong GUID.
+        assert!(fmi2Instantiate(c"a".as_ptr(), 1, g.as_ptr(), null(), null(), 0, 0).is_null());
+        assert!(fmi2Instantiate(null(), 1, g.as_ptr(), null(), &cb, 0, 0).is_null());
+        assert!(fmi2Instantiate(c"".as_ptr(), 1, g.as_ptr(), null(), &cb, 0, 0).is_null());
+        assert!(fmi2Instantiate(c"a".as_ptr(), 0, g.as_ptr(), null(), &cb, 0, 0).is_null());
+        assert!(fmi2Instantiate(c"a".as_ptr(), 1, c"{x}".as_ptr(), null(), &cb, 0, 0).is_null());
+        assert!(fmi2Instantiate(c"a".as_ptr(), 1, null(), null(), &cb, 0, 0).is_null());
+        // Null component everywhere.
+        let mut v = [0.0];
+        assert_eq!(
+            fmi2GetReal(null_mut(), [100].as_ptr(), 1, v.as_mut_ptr()),
+            FMI2_ERROR
+        );
+        assert_eq!(
+            fmi2SetReal(null_mut(), [0].as_ptr(), 1, v.as_ptr()),
+            FMI2_ERROR
+        );
+        assert_eq!(fmi2DoStep(null_mut(), 0.0, 1e-3, 0), FMI2_ERROR);
+        assert_eq!(fmi2Reset(null_mut()), FMI2_ERROR);
+        assert_eq!(fmi2ExitInitializationMode(null_mut()), FMI2_ERROR);
+        fmi2FreeInstance(null_mut());
+
+        let c = instantiate(&cb);
+        assert!(!c.is_null());
+        // Null arrays with nvr > 0; nvr = 0 with null arrays is fine.
+        assert_eq!(fmi2GetReal(c, null(), 1, v.as_mut_ptr()), FMI2_ERROR);
+        assert_eq!(fmi2GetReal(c, [1000].as_ptr(), 1, null_mut()), FMI2_ERROR);
+        assert_eq!(fmi2SetReal(c, [1000].as_ptr(), 1, null()), FMI2_ERROR);
+        assert_eq!(fmi2SetReal(c, null(), 0, null()), FMI2_OK);
+        // Unknown value references, outputs before initialisation, unsupported calls.
+        assert_eq!(
+            fmi2GetReal(c, [4242].as_ptr(), 1, v.as_mut_ptr()),
+            FMI2_ERROR
+        );
+        assert_eq!(
+            fmi2GetReal(c, [100].as_ptr(), 1, v.as_mut_ptr()),
+            FMI2_ERROR
+        );
+        assert_eq!(
+            fmi2SetReal(c, [100].as_ptr(), 1, [1.0].as_ptr()),
+            FMI2_ERROR
+        );
+        assert_eq!(
+            fmi2GetBoolean(c, [0].as_ptr(), 1, [0].as_mut_ptr()),
+            FMI2_ERROR
+        );
+        assert_eq!(fmi2GetFMUstate(c, null_mut()), FMI2_ERROR);
+        assert_eq!(fmi2DoStep(c, 0.0, 1e-3, 0), FMI2_ERROR); // not initialised
+                                                             // Parameters read back as set; start values from Params::default().
+        assert_eq!(fmi2GetReal(c, [1000].as_ptr(), 1, v.as_mut_ptr()), FMI2_OK);
+        assert_eq!(v[0], Params::default().payload_mass);
+        // A wrong parameter: error at exit initialisation, then reset recovers.
+        assert_eq!(fmi2EnterInitializationMode(c), FMI2_OK);
+        assert_eq!(
+            fmi2SetReal(c, [1002].as_ptr(), 1, [f64::NAN].as_ptr()),
+            FMI2_OK
+        );
+        assert_eq!(fmi2ExitInitializationMode(c), FMI2_ERROR);
+        assert_eq!(fmi2Reset(c), FMI2_OK);
+        assert_eq!(fmi2EnterInitializationMode(c), FMI2_OK);
+        assert_eq!(fmi2ExitInitializationMode(c), FMI2_OK);
+        // Not a multiple of h; a NaN input rejects the step (the model's StepError).
+        assert_eq!(fmi2DoStep(c, 0.0, 1.5e-3, 0), FMI2_ERROR);
+        assert_eq!(fmi2DoStep(c, 0.0, 2e-3, 0), FMI2_OK);
+        assert_eq!(
+            fmi2SetReal(c, [0].as_ptr(), 1, [f64::NAN].as_ptr()),
+            FMI2_OK
+        );
+        assert_eq!(fmi2DoStep(c, 2e-3, 1e-3, 0), FMI2_ERROR);
+        let mut terminated = 0;
+        assert_eq!(fmi2GetBooleanStatus(c, 3, &mut terminated), FMI2_OK);
+        assert_eq!(terminated, 1);
+        let mut t = 0.0;
+        assert_eq!(fmi2GetRealStatus(c, 2, &mut t), FMI2_OK);
+        assert_eq!(t, 2e-3);
+        fmi2FreeInstance(c);
+    }
+}
+
+#[test]
+fn a_tunable_parameter_changed_while_stepping_continues_from_the_current_state() {
+    let cb = callbacks();
+    let c = instantiate(&cb);
+    let init = State {
+        q: [0.25, 0.3, 0.35, std::f64::consts::FRAC_PI_2, 0.0],
+        qd: [0.0; 5],
+    };
+    let mut crane: Crane = Crane::new(&Params::default(), Config::default(), init).unwrap();
+    let u = [4.0, -3.0, 0.0];
+    unsafe {
+        assert_eq!(fmi2EnterInitializationMode(c), FMI2_OK);
+        assert_eq!(fmi2ExitInitializationMode(c), FMI2_OK);
+        assert_eq!(fmi2SetReal(c, [0, 1, 2].as_ptr(), 3, u.as_ptr()), FMI2_OK);
+        assert_eq!(fmi2DoStep(c, 0.0, 0.5, 0), FMI2_OK);
+    }
+    for _ in 0..500 {
+        crane.step(u).unwrap();
+    }
+    // Heavier payload from t = 0.5 s: the model rebuilt at the current state (modes from the
+    // velocities, as `Crane::new` derives them).
+    let heavier = Params {
+        payload_mass: 0.8,
+        ..Params::default()
+    };
+    let mut crane: Crane = Crane::new(&heavier, Config::default(), crane.state()).unwrap();
+    unsafe {
+        assert_eq!(fmi2SetReal(c, [1000].as_ptr(), 1, [0.8].as_ptr()), FMI2_OK);
+        // A bad value is refused and changes nothing.
+        assert_eq!(
+            fmi2SetReal(c, [1000].as_ptr(), 1, [-0.8].as_ptr()),
+            FMI2_ERROR
+        );
+        assert_eq!(fmi2DoStep(c, 0.5, 0.5, 0), FMI2_OK);
+    }
+    for _ in 0..500 {
+        crane.step(u).unwrap();
+    }
+    let s = crane.state();
+    let want: Vec<u64> = s.q.iter().chain(&s.qd).map(|v| v.to_bits()).collect();
+    let got: Vec<u64> = get(c, &(100..110).collect::<Vec<u32>>())
+        .iter()
+        .map(|v| v.to_bits())
+        .collect();
+    assert_eq!(got, want);
+    unsafe { fmi2FreeInstance(c) };
+}
