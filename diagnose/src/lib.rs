@@ -112,12 +112,11 @@ pub fn diagnose_dataset(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, 
     }
 }
 
-/// Whether single-axis data come from a closed loop (the recorded input depends on the
-/// motion; the inverse-dynamics pipeline of [`axis`] with the rig's controller handles them).
+/// Whether single-axis data come from a closed loop: the data set declares the controller
+/// (`[controller]`), so the recorded input depends on the motion and the inverse-dynamics
+/// pipeline of [`axis`] with the rig's controller handles them.
 fn closed_loop(ds: &Dataset) -> bool {
-    ds.runs
-        .iter()
-        .any(|r| r.name.contains("emps") || r.name.contains("EMPS"))
+    ds.spec.controller.is_some()
 }
 
 /// The single-axis runs of a data set for the simulation pipeline, split into fitting and
@@ -157,11 +156,22 @@ fn drive_runs(
             }
         }
     }
+    let first = axis
+        .first()
+        .map(|(_, a)| *a)
+        .ok_or_else(|| DiagnoseError::Input("the data set has no single-axis run".into()))?;
     let info = drive::DriveInfo {
-        motion: crane_model::drive::Motion::Linear,
-        position_unit: "m".into(),
-        force_unit: "N".into(),
+        motion: match first.position_unit {
+            crane_ident::data::PositionUnit::Radian => crane_model::drive::Motion::Rotary,
+            crane_ident::data::PositionUnit::Metre => crane_model::drive::Motion::Linear,
+        },
+        position_unit: first.position_unit.symbol().into(),
+        force_unit: first.effort_unit().into(),
         symmetric: false,
+        load_notes: axis
+            .iter()
+            .flat_map(|(r, a)| a.notes.iter().map(move |n| format!("{}: {n}", r.name)))
+            .collect(),
     };
     Ok((runs, doc, info))
 }

@@ -31,6 +31,9 @@ pub struct DriveInfo {
     pub force_unit: String,
     /// Start from a symmetric baseline (one kinetic and one viscous coefficient).
     pub symmetric: bool,
+    /// What the loader noticed or did to the runs (resampling, held channels), one line
+    /// each; reported with the final model's flags.
+    pub load_notes: Vec<String>,
 }
 
 /// Diagnoses single-axis runs (open loop: the recorded input drives the model).
@@ -266,7 +269,8 @@ pub fn diagnose_drive(
             })
             .collect(),
     };
-    let mut flags: Vec<String> = final_.est.flags.iter().map(Flag::to_string).collect();
+    let mut flags: Vec<String> = info.load_notes.clone();
+    flags.extend(final_.est.flags.iter().map(Flag::to_string));
     flags.extend(notes.into_values());
     let final_model = final_model(&final_.est, info, &flags);
     if let Some(dir) = &opts.plots_dir {
