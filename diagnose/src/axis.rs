@@ -9,8 +9,8 @@
 
 use crate::fit::{bump_shape, deadband, delta_bic, ls, mae, sse};
 use crate::{
-    split_runs, AxisError, Baseline, Candidate, DiagnoseError, DiagnoseOptions, Evidence, Finding,
-    Report, FIT_FRACTION,
+    split_runs, AxisError, Baseline, Candidate, Cause, DiagnoseError, DiagnoseOptions, Evidence,
+    Finding, Report, Verdict, FIT_FRACTION,
 };
 use crane_ident::data::{AxisRun, Dataset};
 use crane_ident::emps::{process, IdimOptions};
@@ -40,11 +40,7 @@ struct Part {
 const MAXD: usize = 12;
 
 fn append(part: &mut Part, run: &AxisRun, range: std::ops::Range<usize>, opt: &IdimOptions) {
-    let sub = AxisRun {
-        t: run.t[range.clone()].to_vec(),
-        x: run.x[range.clone()].to_vec(),
-        force: run.force[range].to_vec(),
-    };
+    let sub = run.slice(range);
     let p = process(&sub, opt);
     let r = opt.decimation;
     part.q.extend(&p.q);
@@ -131,7 +127,7 @@ fn base_cols_full(p: &Part, sym: bool, mid: f64, half: f64) -> Vec<Vec<f64>> {
 }
 
 struct Cand {
-    cause: &'static str,
+    cause: Cause,
     params: BTreeMap<String, f64>,
     k: usize,
     sse_h: f64,
@@ -208,7 +204,7 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
     let hrange = held.f.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
         - held.f.iter().cloned().fold(f64::INFINITY, f64::min);
     let mut cands: Vec<Cand> = Vec::new();
-    let mut push = |cause: &'static str,
+    let mut push = |cause: Cause,
                     params: BTreeMap<String, f64>,
                     k: usize,
                     r: Option<(f64, f64, f64, Vec<f64>)>| {
@@ -272,7 +268,7 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
             );
             let amp = r.as_ref().and_then(|x| x.3.last().copied()).unwrap_or(0.0);
             push(
-                "localized_friction",
+                Cause::LocalizedFriction,
                 pm(&[
                     ("center_m", c),
                     ("width_m", w),
@@ -285,7 +281,7 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
         }
     }
     // causes whose best fit is unphysical (reported as unsupported candidates)
-    let mut not_physical: Vec<&'static str> = Vec::new();
+    let mut not_physical: Vec<Cause> = Vec::new();
     // stiction
     {
         let col = |p: &Part, vs: f64| -> Vec<f64> {
@@ -321,7 +317,7 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
             // is not stiction and is not offered as a finding
             if amp > 0.0 {
                 push(
-                    "stiction",
+                    Cause::Stiction,
                     pm(&[
                         ("ratio", 1.0 + amp / fc.abs().max(1e-9)),
                         ("velocity_m_per_s", vs),
@@ -331,11 +327,11 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
                     r,
                 );
             } else {
-                not_physical.push("stiction");
+                not_physical.push(Cause::Stiction);
             }
         }
     }
-    let mut not_ident: Vec<&'static str> = Vec::new();
+    let mut not_ident: Vec<Cause> = Vec::new();
     if sym {
         let cols = |p: &Part| {
             vec![
@@ -356,7 +352,7 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
             // negative Fc - o (the offset is not separable from direction-dependent dry
             // friction: the two dry levels include it)
             push(
-                "direction_asymmetry",
+                Cause::DirectionAsymmetry,
                 pm(&[
                     ("viscous_pos_n_s_per_m", th[1] + th[4]),
                     ("viscous_neg_n_s_per_m", th[1]),
@@ -368,10 +364,10 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
             );
         }
         // the symmetric baseline already carries the published offset
-        not_ident.push("force_offset");
+        not_ident.push(Cause::ForceOffset);
     } else {
-        not_ident.push("force_offset");
-        not_ident.push("direction_asymmetry");
+        not_ident.push(Cause::ForceOffset);
+        not_ident.push(Cause::DirectionAsymmetry);
     }
     // input delay: the force acts m samples later
     {
@@ -386,7 +382,7 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
         }
         if let Some((_, m)) = best.filter(|b| b.1 > 0) {
             push(
-                "input_delay",
+                Cause::InputDelay,
                 pm(&[("delay_s", m as f64 * dt)]),
                 1,
                 eval(&[], &[], &fit.fd[m], &held.fd[m]),
@@ -413,14 +409,14 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
         }
         if let Some((_, d)) = best {
             push(
-                "input_deadzone",
+                Cause::InputDeadzone,
                 pm(&[("deadzone_v", d)]),
                 1,
                 eval(&[], &[], &dz(&fit, d), &dz(&held, d)),
             );
         }
     }
-    not_ident.push("payload_mass");
+    not_ident.push(Cause::PayloadMass);
     let n_h = held.f.len();
     let mut scored: Vec<(Cand, f64)> = cands
         .into_iter()
@@ -436,7 +432,7 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
         // a finding must also cut the held-out force NMAE it reports
         let ok = *b < FORCE_BIC_MAX && c.sse_h < (1.0 - MIN_CUT) * sse0 && c.mae_h < mae0;
         candidates.push(Candidate {
-            cause: c.cause.into(),
+            cause: c.cause,
             axis: "axis".into(),
             parameters: c.params.clone(),
             score: b / n_h as f64,
@@ -445,12 +441,12 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
         });
         if ok {
             let (identifiable, note) = match c.cause {
-                "force_offset" => (false, "a constant offset is exactly a shift of the two dry-friction magnitudes (Fc+ by -b, Fc- by +b): not identifiable apart from direction-dependent dry friction".to_string()),
-                "direction_asymmetry" => (true, "the dry part of the asymmetry overlaps a force offset; the viscous part does not".to_string()),
+                Cause::ForceOffset => (false, "a constant offset is exactly a shift of the two dry-friction magnitudes (Fc+ by -b, Fc- by +b): not identifiable apart from direction-dependent dry friction".to_string()),
+                Cause::DirectionAsymmetry => (true, "the dry part of the asymmetry overlaps a force offset; the viscous part does not".to_string()),
                 _ => (true, String::new()),
             };
             findings.push(Finding {
-                cause: c.cause.into(),
+                cause: c.cause,
                 axis: "axis".into(),
                 parameters: c.params.clone(),
                 nmae_before: 100.0 * mae0 / hrange,
@@ -470,7 +466,7 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
     }
     for c in not_physical.into_iter().chain(not_ident) {
         candidates.push(Candidate {
-            cause: c.into(),
+            cause: c,
             axis: "axis".into(),
             parameters: BTreeMap::new(),
             score: 0.0,
@@ -506,14 +502,14 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
     }
     let (verdict, reason) = match findings.first() {
         Some(f) => (
-            f.cause.clone(),
+            Verdict::Found(f.cause),
             format!(
                 "{} cuts the held-out force NMAE from {:.3} % to {:.3} %",
                 f.cause, f.nmae_before, f.nmae_after
             ),
         ),
         None => (
-            "none".into(),
+            Verdict::None,
             "no candidate improves the held-out force residual beyond the penalty".into(),
         ),
     };

@@ -3,8 +3,8 @@
 
 use crate::fit::{bump_shape, deadband, delay_half_samples, dry, ls, sse};
 use crate::{
-    split_runs, AxisError, Baseline, Candidate, DiagnoseError, DiagnoseOptions, Evidence, Finding,
-    Report, FIT_FRACTION,
+    split_runs, AxisError, Baseline, Candidate, Cause, DiagnoseError, DiagnoseOptions, Evidence,
+    Finding, Report, Verdict, FIT_FRACTION,
 };
 use crane_ident::data::{CraneRun, Dataset};
 use crane_ident::signal::{butter, diff2_central, diff_central, Filter};
@@ -77,17 +77,28 @@ pub enum Ext {
     Payload(f64),
 }
 
+/// The causes tried on crane data (the hidden-effect sweep draws from these).
+pub const CRANE_CAUSES: [Cause; 7] = [
+    Cause::LocalizedFriction,
+    Cause::Stiction,
+    Cause::DirectionAsymmetry,
+    Cause::ForceOffset,
+    Cause::InputDeadzone,
+    Cause::InputDelay,
+    Cause::PayloadMass,
+];
+
 impl Ext {
-    /// Reported cause name.
-    pub fn cause(&self) -> &'static str {
+    /// Reported cause.
+    pub fn cause(&self) -> Cause {
         match self {
-            Ext::Bump { .. } => "localized_friction",
-            Ext::Stiction { .. } => "stiction",
-            Ext::Asymmetry { .. } => "direction_asymmetry",
-            Ext::Offset(_) => "force_offset",
-            Ext::Deadzone(_) => "input_deadzone",
-            Ext::Delay(_) => "input_delay",
-            Ext::Payload(_) => "payload_mass",
+            Ext::Bump { .. } => Cause::LocalizedFriction,
+            Ext::Stiction { .. } => Cause::Stiction,
+            Ext::Asymmetry { .. } => Cause::DirectionAsymmetry,
+            Ext::Offset(_) => Cause::ForceOffset,
+            Ext::Deadzone(_) => Cause::InputDeadzone,
+            Ext::Delay(_) => Cause::InputDelay,
+            Ext::Payload(_) => Cause::PayloadMass,
         }
     }
 
@@ -751,7 +762,7 @@ pub fn diagnose_crane(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Di
 
     // ---- force-domain fits ----
     let mut cands: Vec<Cand> = Vec::new();
-    let mut not_identifiable: Vec<(usize, &'static str)> = Vec::new();
+    let mut not_identifiable: Vec<(usize, Cause)> = Vec::new();
     for i in 0..3 {
         let (fg, hg) = (&fit_g[i], &held_g[i]);
         if fg.r.len() < 20 || hg.r.len() < 20 {
@@ -856,8 +867,8 @@ pub fn diagnose_crane(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Di
             let ones_h = vec![1.0; hg.r.len()];
             cands.push(one(Ext::Offset(0.0), &ones_f, &ones_h, -1.0));
         } else {
-            not_identifiable.push((i, "force_offset"));
-            not_identifiable.push((i, "direction_asymmetry"));
+            not_identifiable.push((i, Cause::ForceOffset));
+            not_identifiable.push((i, Cause::DirectionAsymmetry));
         }
         // input dead band and delay: the residual they predict has no free amplitude
         let gain = axis_params(&base, i).gain;
@@ -1052,7 +1063,7 @@ pub fn diagnose_crane(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Di
         let ok = supported(*fb, *s, st) && !nested_loses(c, *fb) && own_cut;
         let axis_name = if c.axis == 3 { "l" } else { AXIS_NAMES[c.axis] };
         candidates.push(Candidate {
-            cause: c.ext.cause().into(),
+            cause: c.ext.cause(),
             axis: axis_name.into(),
             parameters: c.ext.parameters(),
             score: *s,
@@ -1093,7 +1104,7 @@ pub fn diagnose_crane(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Di
             _ => (true, String::new()),
         };
         findings.push(Finding {
-            cause: c.ext.cause().into(),
+            cause: c.ext.cause(),
             axis: axis_name.into(),
             parameters: c.ext.parameters(),
             nmae_before: before_h[ai],
@@ -1112,7 +1123,7 @@ pub fn diagnose_crane(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Di
     }
     for (i, cause) in not_identifiable {
         candidates.push(Candidate {
-            cause: cause.into(),
+            cause,
             axis: AXIS_NAMES[i].into(),
             parameters: BTreeMap::new(),
             score: 0.0,
@@ -1125,7 +1136,7 @@ pub fn diagnose_crane(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Di
         .fold(0.0_f64, f64::max);
     let (verdict, reason) = if let Some(f) = findings.first() {
         (
-            f.cause.clone(),
+            Verdict::Found(f.cause),
             format!(
                 "{} on {} cuts the held-out NMAE from {:.4} % to {:.4} %",
                 f.cause, f.axis, f.nmae_before, f.nmae_after
@@ -1133,12 +1144,12 @@ pub fn diagnose_crane(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Di
         )
     } else if worst > UNEXPLAINED_FLOORS {
         (
-            "unexplained".to_string(),
+            Verdict::Unexplained,
             format!("the held-out simulation error is {worst:.1} noise floors but no candidate cuts it by {:.0} %", 100.0 * (1.0 - SUPPORT_RATIO)),
         )
     } else {
         (
-            "none".to_string(),
+            Verdict::None,
             format!("the held-out simulation error is within {worst:.1} noise floors and no candidate is supported"),
         )
     };

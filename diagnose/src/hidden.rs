@@ -23,7 +23,10 @@ pub struct Hidden {
 impl Hidden {
     /// Cause name (`none` for clean data).
     pub fn cause(&self) -> &'static str {
-        self.ext.as_ref().map(|e| e.cause()).unwrap_or("none")
+        self.ext
+            .as_ref()
+            .map(|e| e.cause().as_str())
+            .unwrap_or("none")
     }
     /// Axis name as reported (`l` for the payload mass).
     pub fn axis_name(&self) -> &'static str {
@@ -41,7 +44,7 @@ impl Effect for HiddenEffect {
     }
 }
 
-/// Draws a hidden effect of `cause` (one of [`crate::CAUSES`], or `none`) from `seed`.
+/// Draws a hidden effect of `cause` (the name of one of [`crate::crane::CRANE_CAUSES`], or `none`) from `seed`.
 pub fn draw(cause: &str, seed: u64) -> Hidden {
     let mut rng = Rng::new(seed ^ 0x9e37_79b9_7f4a_7c15);
     let sign = |rng: &mut Rng| if rng.uniform() < 0.5 { -1.0 } else { 1.0 };

@@ -22,24 +22,17 @@ pub mod drive;
 pub mod fit;
 pub mod hidden;
 pub mod plots;
+pub mod report;
 mod summary;
+
+pub use report::{
+    AxisError, Candidate, Cause, Evidence, FinalModel, Finding, HeldoutSimulation, Report,
+    RunSimulation, Verdict,
+};
 
 use crane_ident::data::{load_dataset, Dataset, Samples};
 use crane_ident::params_file::ParamsFile;
-use serde::{Deserialize, Serialize};
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-
-/// The names of the candidate causes, as reported.
-pub const CAUSES: [&str; 7] = [
-    "localized_friction",
-    "stiction",
-    "direction_asymmetry",
-    "force_offset",
-    "input_deadzone",
-    "input_delay",
-    "payload_mass",
-];
 
 /// Which baseline model the discrepancies are measured against.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -66,207 +59,6 @@ pub struct DiagnoseOptions {
     pub baseline: Baseline,
     /// Write SVG plots of the residuals before and after the extension here.
     pub plots_dir: Option<PathBuf>,
-}
-
-/// Evidence behind a finding.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Evidence {
-    /// Held-out BIC-like change of the inverse-dynamics force residual
-    /// `n ln(SSE_after / SSE_before) + k ln n` (negative supports the extension).
-    pub force_delta_bic: f64,
-    /// Held-out RMS inverse-dynamics force residual before / after [N] (affected axis).
-    pub force_rms_before_n: f64,
-    /// Same after the extension [N].
-    pub force_rms_after_n: f64,
-    /// Held-out score used for the ranking (crane: sum over axes of the log ratio of the
-    /// simulated NMAE after / before, each floored at the noise level, plus the parameter
-    /// penalty; single-axis: `force_delta_bic / n`); lower is stronger.
-    pub score: f64,
-    /// Extra parameters of the extension.
-    pub extra_parameters: usize,
-    /// Held-out samples used (after masking and decimation, affected axis).
-    pub held_out_samples: usize,
-    /// Whether the finding can be told apart from a change of the baseline itself.
-    pub identifiable: bool,
-    /// Explanation (equivalences, caveats).
-    pub note: String,
-}
-
-/// One supported cause.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Finding {
-    /// One of [`CAUSES`].
-    pub cause: String,
-    /// `x`, `y`, `l`, or `axis` for single-axis data.
-    pub axis: String,
-    /// Estimated parameters, SI.
-    pub parameters: BTreeMap<String, f64>,
-    /// Held-out NMAE of the axis before the extension [%].
-    pub nmae_before: f64,
-    /// Held-out NMAE of the axis after the extension [%].
-    pub nmae_after: f64,
-    /// Evidence.
-    pub evidence: Evidence,
-}
-
-/// Baseline error of one axis.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct AxisError {
-    /// Axis name.
-    pub axis: String,
-    /// NMAE on the fitting part [%].
-    pub nmae_fit: f64,
-    /// NMAE on the held-out part [%].
-    pub nmae_held_out: f64,
-    /// Noise level of the NMAE [%] (crane: encoder quantisation); below it nothing is claimed.
-    pub nmae_noise: f64,
-    /// RMS inverse-dynamics force residual on the fitting part [N].
-    pub force_rms_fit_n: f64,
-    /// RMS inverse-dynamics force residual on the held-out part [N].
-    pub force_rms_held_out_n: f64,
-    /// Relative force error `100 ||F - F_model|| / ||F||` on the held-out part [%].
-    pub force_rel_err_held_out_pct: f64,
-}
-
-/// Every candidate tried, for transparency.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Candidate {
-    /// Cause.
-    pub cause: String,
-    /// Axis.
-    pub axis: String,
-    /// Fitted parameters.
-    pub parameters: BTreeMap<String, f64>,
-    /// Ranking score (see [`Evidence::score`]).
-    pub score: f64,
-    /// Held-out force BIC change.
-    pub force_delta_bic: f64,
-    /// Whether it passed the support thresholds.
-    pub supported: bool,
-}
-
-/// The report (`REPORT_SCHEMA.md`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Report {
-    /// Data-set directory.
-    pub dataset: String,
-    /// `crane` or `single_axis`.
-    pub data: String,
-    /// Baseline description.
-    pub baseline: String,
-    /// How runs were split into fitting and held-out parts.
-    pub split: String,
-    /// Baseline error per axis.
-    pub baseline_errors: Vec<AxisError>,
-    /// Supported causes, strongest first.
-    pub findings: Vec<Finding>,
-    /// The first finding's cause, or `none` / `unexplained`.
-    pub verdict: String,
-    /// Why the verdict.
-    pub verdict_reason: String,
-    /// Every candidate tried.
-    pub candidates: Vec<Candidate>,
-    /// Extra numbers of the single-axis pipeline (published-measure comparisons).
-    #[serde(skip_serializing_if = "BTreeMap::is_empty", default)]
-    pub measures: BTreeMap<String, f64>,
-    /// Single-axis open-loop data: the held-out runs simulated from their recorded input with
-    /// the baseline and with the final model.
-    #[serde(skip_serializing_if = "Option::is_none", default)]
-    pub heldout_simulation: Option<HeldoutSimulation>,
-    /// Single-axis open-loop data: the final model (baseline plus every finding).
-    #[serde(skip_serializing_if = "Option::is_none", default)]
-    pub final_model: Option<FinalModel>,
-}
-
-/// Held-out runs simulated from their recorded input (position NMAE: mean absolute error over
-/// the measured run's position range) [%].
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct HeldoutSimulation {
-    /// Mean over held-out runs, baseline [%].
-    pub nmae_before: f64,
-    /// Mean over held-out runs, final model [%].
-    pub nmae_after: f64,
-    /// Mean over held-out runs of predicting no motion at all (the first position) [%].
-    pub nmae_no_motion: f64,
-    /// Mean over the held-out runs in which the axis moves (beyond pre-sliding), baseline [%]:
-    /// the measure the causes are selected by (runs that stay at rest cannot tell friction
-    /// models apart).
-    pub moving_nmae_before: f64,
-    /// Same, final model [%].
-    pub moving_nmae_after: f64,
-    /// Same, predicting no motion [%].
-    pub moving_nmae_no_motion: f64,
-    /// Per held-out run.
-    pub runs: Vec<RunSimulation>,
-}
-
-/// One held-out run's simulated position error [%].
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct RunSimulation {
-    /// Run file.
-    pub file: String,
-    /// Baseline [%].
-    pub nmae_before: f64,
-    /// Final model [%].
-    pub nmae_after: f64,
-    /// Predicting no motion [%].
-    pub nmae_no_motion: f64,
-    /// Whether the measured axis moves in this run (faster than the motion threshold).
-    pub moves: bool,
-}
-
-/// The final single-axis model, in SI units or, when the input gain is unknown, in input
-/// units (`force_unit`). Friction magnitudes are >= 0; `breakaway_*` are net of the modelled
-/// position force, at first motion.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct FinalModel {
-    /// Unit of positions (`m` or `rad`).
-    pub position_unit: String,
-    /// Unit of forces (`N`, `N m`, or the input unit).
-    pub force_unit: String,
-    /// Inertia [force unit per (position unit / s^2)].
-    pub inertia: f64,
-    /// Breakaway level towards positive [force unit].
-    pub breakaway_pos: f64,
-    /// Breakaway level towards negative (magnitude) [force unit].
-    pub breakaway_neg: f64,
-    /// Kinetic friction moving positive [force unit].
-    pub kinetic_pos: f64,
-    /// Kinetic friction moving negative (magnitude) [force unit].
-    pub kinetic_neg: f64,
-    /// Viscous friction moving positive [force unit per (position unit / s)].
-    pub viscous_pos: f64,
-    /// Viscous friction moving negative [force unit per (position unit / s)].
-    pub viscous_neg: f64,
-    /// Restoring stiffness [force unit per position unit] (0 when none).
-    pub stiffness: f64,
-    /// Centre of the restoring force [position unit].
-    pub center: f64,
-    /// Constant force offset [force unit].
-    pub offset: f64,
-    /// Input dead band [input units].
-    pub deadband: f64,
-    /// Input delay [samples].
-    pub delay_samples: usize,
-    /// Scatter (standard deviation) of the breakaway levels at every rest-to-motion onset of
-    /// the fitting runs, positive direction [force unit] (0 when unknown).
-    pub breakaway_scatter_pos: f64,
-    /// Same, negative direction.
-    pub breakaway_scatter_neg: f64,
-    /// Net force at first motion per fitting run, positive direction [force unit].
-    pub first_motion_pos: Vec<f64>,
-    /// Same, negative direction (magnitudes).
-    pub first_motion_neg: Vec<f64>,
-    /// What the estimator had to decide (parameters at a bound, directions not fitted,
-    /// causes not named and why).
-    pub flags: Vec<String>,
-}
-
-impl Report {
-    /// Pretty JSON.
-    pub fn to_json(&self) -> String {
-        serde_json::to_string_pretty(self).unwrap_or_default()
-    }
 }
 
 /// Why the diagnosis failed.
@@ -320,12 +112,11 @@ pub fn diagnose_dataset(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, 
     }
 }
 
-/// Whether single-axis data come from a closed loop (the recorded input depends on the
-/// motion; the inverse-dynamics pipeline of [`axis`] with the rig's controller handles them).
+/// Whether single-axis data come from a closed loop: the data set declares the controller
+/// (`[controller]`), so the recorded input depends on the motion and the inverse-dynamics
+/// pipeline of [`axis`] with the rig's controller handles them.
 fn closed_loop(ds: &Dataset) -> bool {
-    ds.runs
-        .iter()
-        .any(|r| r.name.contains("emps") || r.name.contains("EMPS"))
+    ds.spec.controller.is_some()
 }
 
 /// The single-axis runs of a data set for the simulation pipeline, split into fitting and
@@ -365,11 +156,22 @@ fn drive_runs(
             }
         }
     }
+    let first = axis
+        .first()
+        .map(|(_, a)| *a)
+        .ok_or_else(|| DiagnoseError::Input("the data set has no single-axis run".into()))?;
     let info = drive::DriveInfo {
-        motion: crane_model::drive::Motion::Linear,
-        position_unit: "m".into(),
-        force_unit: "N".into(),
+        motion: match first.position_unit {
+            crane_ident::data::PositionUnit::Radian => crane_model::drive::Motion::Rotary,
+            crane_ident::data::PositionUnit::Metre => crane_model::drive::Motion::Linear,
+        },
+        position_unit: first.position_unit.symbol().into(),
+        force_unit: first.effort_unit().into(),
         symmetric: false,
+        load_notes: axis
+            .iter()
+            .flat_map(|(r, a)| a.notes.iter().map(move |n| format!("{}: {n}", r.name)))
+            .collect(),
     };
     Ok((runs, doc, info))
 }

@@ -13,6 +13,13 @@ fn emps() -> Dataset {
     spec.gain_n_per_v = Some(GTAU);
     spec.columns.insert("x".into(), "qm".into());
     spec.columns.insert("u".into(), "vir".into());
+    // the rig's controller, as `examples/emps` declares it: closed-loop data
+    spec.controller = crane_ident::data::load_dataset(
+        &PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../examples/emps"),
+    )
+    .expect("examples/emps loads")
+    .spec
+    .controller;
     let runs = [
         ("emps_estimation_raw.csv", RunKind::Other),
         ("emps_validation_pulses_raw.csv", RunKind::Validation),

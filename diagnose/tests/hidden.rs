@@ -2,8 +2,9 @@
 //! name it without being told.
 
 use crane_diagnose::crane::Ext;
+use crane_diagnose::crane::CRANE_CAUSES;
 use crane_diagnose::hidden::{dataset, draw, Hidden};
-use crane_diagnose::{diagnose_dataset, DiagnoseOptions, Report, CAUSES};
+use crane_diagnose::{diagnose_dataset, DiagnoseOptions, Report};
 use std::time::Instant;
 
 const SECONDS: f64 = 14.0;
@@ -117,7 +118,7 @@ fn hidden_effect_sweep() {
     let mut lines = Vec::new();
     let mut rates = std::collections::BTreeMap::new();
     let only = std::env::var("SWEEP_CAUSES").ok();
-    for cause in std::iter::once("none").chain(CAUSES) {
+    for cause in std::iter::once("none").chain(CRANE_CAUSES.iter().map(|c| c.as_str())) {
         if only
             .as_ref()
             .is_some_and(|o| !o.split(',').any(|c| c == cause))
@@ -179,7 +180,7 @@ fn hidden_effect_sweep() {
 #[test]
 #[ignore = "exploration print-out"]
 fn explore() {
-    for cause in std::iter::once("none").chain(CAUSES) {
+    for cause in std::iter::once("none").chain(CRANE_CAUSES.iter().map(|c| c.as_str())) {
         for seed in 1..3u64 {
             let t0 = Instant::now();
             let (h, r) = case(cause, seed);

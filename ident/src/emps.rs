@@ -7,7 +7,7 @@
 //! Models: symmetric `tau = M qdd + Fv qd + Fc sign(qd) + offset`, and direction-dependent
 //! `tau = M qdd + Fv+ qd+ + Fv- qd- + Fc+ [qd > 0] - Fc- [qd < 0]`.
 
-use crate::data::AxisRun;
+use crate::data::{AxisRun, ControllerSpec, Gain, VelocityEstimate};
 use crate::linalg::{lstsq, LsError, LsFit};
 use crate::signal::{butter, decimate, diff_central};
 use serde::{Deserialize, Serialize};
@@ -180,6 +180,60 @@ impl Default for Controller {
     }
 }
 
+/// Why a declared controller (`[controller]` of `dataset.toml`) cannot drive
+/// [`simulate_closed_loop`].
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ControllerError {
+    /// The simulation implements the EMPS rig's averaged difference only.
+    #[error("the closed-loop simulation estimates the velocity as the EMPS rig does (`velocity = \"averaged_difference\"`); the data set declares `{0}`")]
+    Velocity(&'static str),
+    /// No velocity feedback (`D = 0`): not the EMPS law `u = kv (kp (r - q) - qdot)`.
+    #[error("the closed-loop simulation needs velocity feedback (kv or kd > 0)")]
+    NoVelocityFeedback,
+}
+
+impl Controller {
+    /// The controller a data set declares, with the input gain (`gtau`; 1 when unknown: the
+    /// simulated effort is then in input units). The EMPS data set's declaration
+    /// (`examples/emps/dataset.toml`) gives [`Controller::default`].
+    pub fn from_declared(spec: &ControllerSpec, gain: Gain) -> Result<Controller, ControllerError> {
+        if spec.velocity != VelocityEstimate::AveragedDifference {
+            return Err(ControllerError::Velocity("backward_difference"));
+        }
+        let d = spec.d_gain();
+        if d.is_nan() || d <= 0.0 {
+            return Err(ControllerError::NoVelocityFeedback);
+        }
+        let kp = match spec.kv {
+            Some(_) => spec.kp,
+            None => spec.kp / d,
+        };
+        Ok(Controller {
+            kp,
+            kv: d,
+            sat_v: spec.saturation.unwrap_or(f64::INFINITY),
+            gtau: gain.value().unwrap_or(1.0),
+            delay_samples: spec.delay_samples,
+        })
+    }
+}
+
+impl ClosedLoopRun {
+    /// The closed-loop signals of a loaded single-axis run (`None` when its data set declares
+    /// no controller): position `x`, reference and added input from the declaration, the
+    /// recorded input `u` as the command.
+    pub fn from_axis(run: &AxisRun) -> Option<ClosedLoopRun> {
+        let c = run.closed_loop.as_ref()?;
+        Some(ClosedLoopRun {
+            t: run.t.clone(),
+            q: run.x.clone(),
+            reference: c.reference.clone(),
+            vir: run.u.clone(),
+            pulses_v: c.added_input.clone(),
+        })
+    }
+}
+
 /// A single-axis model to simulate in closed loop: `M qdd = gtau vir - f(qd) - offset`, with
 /// `f = Fv+ qd + Fc+` moving positive, `Fv- qd - Fc-` moving negative, and exact sticking
 /// (a stopped axis stays stopped while `|gtau vir - offset|` is below the dry magnitude of the
@@ -242,21 +296,25 @@ pub struct ClosedLoopRun {
     pub pulses_v: Vec<f64>,
 }
 
-/// Loads an EMPS CSV (`t, qm, qg, vir` and optionally `pulses_N`); the error names the file and
-/// the missing column or bad line.
-pub fn load_closed_loop(path: &std::path::Path) -> Result<ClosedLoopRun, String> {
-    let table = crate::data::read_table(path).map_err(|e| e.to_string())?;
-    let col = |name: &str| -> Result<Vec<f64>, String> {
-        table
-            .header
-            .iter()
-            .position(|h| h == name)
-            .map(|i| table.columns[i].clone())
-            .ok_or_else(|| format!("{}: no column `{name}`", path.display()))
-    };
+/// Loads an EMPS CSV (`t, qm, qg, vir` and optionally `pulses_N`) with the EMPS column names
+/// hard-wired; the error names the file and the missing column or bad line. A data set that
+/// declares its controller (`[controller]`) gives the same signals through
+/// [`ClosedLoopRun::from_axis`].
+pub fn load_closed_loop(path: &std::path::Path) -> Result<ClosedLoopRun, crate::data::DataError> {
+    use crate::data::Problem;
+    let table = crate::data::read_table(path)?;
+    let none = std::collections::BTreeMap::new();
+    let col = |name: &str| table.take(name, &none, None);
     let t = col("t")?;
     if t.len() < 3 {
-        return Err(format!("{}: fewer than 3 samples", path.display()));
+        return Err(crate::data::DataError {
+            location: crate::data::Location {
+                file: path.to_path_buf(),
+                line: None,
+                column: None,
+            },
+            problem: Problem::BadValue("fewer than 3 samples".into()),
+        });
     }
     let pulses_v = col("pulses_N").unwrap_or_else(|_| vec![0.0; t.len()]);
     Ok(ClosedLoopRun {

@@ -830,10 +830,9 @@ pub fn identify_dataset(ds: &Dataset, opt: &IdentOptions) -> Result<Identified, 
     let swing = identify_swing(ds, opt)?;
     let c = &ds.spec.constants;
     let mut p = Params::default();
-    p.payload_mass = if ds.spec.payload_kg > 0.0 {
-        ds.spec.payload_kg
-    } else {
-        p.payload_mass
+    p.payload_mass = match ds.spec.payload_kg {
+        Some(m) if m > 0.0 => m,
+        _ => p.payload_mass,
     };
     p.trolley_mass = c.trolley_mass_kg;
     p.rail_mass = c.rail_mass_kg;

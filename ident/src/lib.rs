@@ -4,8 +4,11 @@
 //! estimation), a virtual rig that records experiments as the INTECO rig would, and the
 //! data format both share (`DATA_FORMAT.md`).
 //!
-//! - [`data`]: runs (CSV) and data sets (`dataset.toml`), loading with located errors.
-//! - [`signal`]: Butterworth / Chebyshev filters, `filtfilt`, `decimate`, differences.
+//! - [`data`]: runs (CSV) and data sets (`dataset.toml`), loading with located errors;
+//!   single-axis units and gain, declared controllers, time-stamp checks and zero-order-hold
+//!   resampling of asynchronous logs.
+//! - [`signal`]: Butterworth / Chebyshev filters, `filtfilt`, `decimate` (per run:
+//!   `decimate_each`), differences; no panic on short runs or slow sampling.
 //! - [`linalg`]: least squares with standard errors and correlations.
 //! - [`emps`]: the EMPS benchmark's inverse-dynamics least squares (IDIM-LS).
 //! - [`rig`]: the virtual rig (quantised encoders, ZOH saturated voltages, noise, an effect

@@ -8,6 +8,38 @@
 //! These are the operations of the EMPS benchmark's IDIM-LS script and of the crane paper's
 //! data processing; reproducing their conventions is what makes the published numbers come
 //! out.
+//!
+//! Nothing here panics on short signals or slow sampling: the `try_` constructors return a
+//! [`SignalError`]; [`butter`] and [`cheby1`] return the identity filter when the cut-off is
+//! at or above the Nyquist frequency (a low-pass there removes nothing). Runs are decimated
+//! one by one ([`decimate_each`]), never after concatenation, so that the columns of a
+//! regression built from several runs stay aligned sample by sample.
+
+/// Highest filter order accepted by the `try_` constructors (the bilinear transform of a
+/// higher-order prototype is ill-conditioned in double precision).
+pub const MAX_ORDER: usize = 16;
+
+/// Why a filter cannot be built or a signal processed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SignalError {
+    /// The normalised cut-off (relative to Nyquist) is not in (0, 1): for a sampling period
+    /// `dt` and a cut-off `f` [Hz], `wn = 2 f dt`; `wn >= 1` means the data are sampled too
+    /// slowly for that cut-off.
+    #[error("cut-off {wn} of Nyquist is outside (0, 1) (sampled too slowly for the cut-off, or a non-positive cut-off)")]
+    Cutoff {
+        /// The normalised cut-off.
+        wn: f64,
+    },
+    /// Filter order 0 or above [`MAX_ORDER`].
+    #[error("filter order {order} is outside 1..={MAX_ORDER}")]
+    Order {
+        /// The order asked for.
+        order: usize,
+    },
+    /// Decimation factor 0.
+    #[error("decimation factor must be >= 1")]
+    Factor,
+}
 
 /// A transfer function `B(z) / A(z)` in powers of `z^-1`, `a[0] = 1`.
 #[derive(Clone, Debug, PartialEq)]
@@ -67,10 +99,20 @@ fn poly(roots: &[C64]) -> Vec<f64> {
     c.into_iter().map(|z| z.re).collect()
 }
 
+fn check_design(n: usize, wn: f64) -> Result<(), SignalError> {
+    if n == 0 || n > MAX_ORDER {
+        return Err(SignalError::Order { order: n });
+    }
+    if !(wn > 0.0 && wn < 1.0) {
+        return Err(SignalError::Cutoff { wn });
+    }
+    Ok(())
+}
+
 /// Low-pass digital filter from an analog prototype's poles and gain (no finite zeros),
-/// cut-off `wn` in (0, 1) relative to Nyquist, by the bilinear transform with pre-warping.
+/// cut-off `wn` in (0, 1) relative to Nyquist (checked by the callers), by the bilinear
+/// transform with pre-warping.
 fn lowpass_from_prototype(poles: &[C64], gain: f64, wn: f64) -> Filter {
-    assert!(wn > 0.0 && wn < 1.0, "cut-off must be in (0, 1) of Nyquist");
     let fs = 2.0;
     let warped = 2.0 * fs * libm::tan(core::f64::consts::PI * wn / fs);
     let n = poles.len();
@@ -90,19 +132,41 @@ fn lowpass_from_prototype(poles: &[C64], gain: f64, wn: f64) -> Filter {
 }
 
 /// Butterworth low-pass of order `n`, cut-off `wn` relative to Nyquist (MATLAB `butter(n, wn)`).
+///
+/// Never panics: a cut-off at or above Nyquist (`wn >= 1`, slow sampling) removes nothing and
+/// gives the identity filter, and so does a degenerate request (order 0 or above
+/// [`MAX_ORDER`], `wn <= 0` or NaN). Use [`try_butter`] to reject those.
 pub fn butter(n: usize, wn: f64) -> Filter {
+    try_butter(n, wn).unwrap_or_else(|_| Filter::identity())
+}
+
+/// Butterworth low-pass of order `n` in 1..=[`MAX_ORDER`], cut-off `wn` in (0, 1) relative to
+/// Nyquist, or the reason it cannot be built.
+pub fn try_butter(n: usize, wn: f64) -> Result<Filter, SignalError> {
+    check_design(n, wn)?;
     let poles: Vec<C64> = (0..n)
         .map(|k| {
             let th = core::f64::consts::PI * (2 * k + n + 1) as f64 / (2 * n) as f64;
             C64::new(libm::cos(th), libm::sin(th))
         })
         .collect();
-    lowpass_from_prototype(&poles, 1.0, wn)
+    Ok(lowpass_from_prototype(&poles, 1.0, wn))
 }
 
 /// Chebyshev type I low-pass of order `n`, pass-band ripple `rp` dB, pass-band edge `wn`
-/// relative to Nyquist (MATLAB `cheby1(n, rp, wn)`).
+/// relative to Nyquist (MATLAB `cheby1(n, rp, wn)`). Never panics: identity filter where
+/// [`try_cheby1`] fails (as [`butter`]).
 pub fn cheby1(n: usize, rp: f64, wn: f64) -> Filter {
+    try_cheby1(n, rp, wn).unwrap_or_else(|_| Filter::identity())
+}
+
+/// Chebyshev type I low-pass (as [`cheby1`]), or the reason it cannot be built; the ripple
+/// `rp` must be positive and finite (reported as a bad cut-off otherwise).
+pub fn try_cheby1(n: usize, rp: f64, wn: f64) -> Result<Filter, SignalError> {
+    check_design(n, wn)?;
+    if !(rp > 0.0 && rp.is_finite()) {
+        return Err(SignalError::Cutoff { wn: rp });
+    }
     let eps = libm::sqrt(libm::pow(10.0, 0.1 * rp) - 1.0);
     let mu = libm::asinh(1.0 / eps) / n as f64;
     let poles: Vec<C64> = (1..=n)
@@ -122,17 +186,25 @@ pub fn cheby1(n: usize, rp: f64, wn: f64) -> Filter {
     if n & 1 == 0 {
         gain /= libm::sqrt(1.0 + eps * eps);
     }
-    lowpass_from_prototype(&poles, gain, wn)
+    Ok(lowpass_from_prototype(&poles, gain, wn))
 }
 
 impl Filter {
+    /// The identity `B = A = 1` (what a low-pass above Nyquist amounts to).
+    pub fn identity() -> Filter {
+        Filter {
+            b: vec![1.0],
+            a: vec![1.0],
+        }
+    }
+
     fn order(&self) -> usize {
-        self.a.len().max(self.b.len()) - 1
+        self.a.len().max(self.b.len()).saturating_sub(1)
     }
 
     fn padded(&self) -> (Vec<f64>, Vec<f64>) {
         let n = self.order() + 1;
-        let a0 = self.a[0];
+        let a0 = self.a.first().copied().unwrap_or(1.0);
         let mut b: Vec<f64> = self.b.iter().map(|v| v / a0).collect();
         let mut a: Vec<f64> = self.a.iter().map(|v| v / a0).collect();
         b.resize(n, 0.0);
@@ -255,6 +327,39 @@ pub fn decimate(x: &[f64], r: usize) -> Vec<f64> {
     y.iter().skip(nbeg - 1).step_by(r).copied().collect()
 }
 
+/// Length of [`decimate`]`(x, r)` for a signal of `n` samples: `ceil(n / r)` (`n` for
+/// `r <= 1`).
+pub fn decimated_len(n: usize, r: usize) -> usize {
+    if r <= 1 {
+        n
+    } else {
+        n.div_ceil(r)
+    }
+}
+
+/// Decimates every run on its own ([`decimate`], same factor) and concatenates the results.
+///
+/// This is the only correct way to decimate data made of several runs: decimating the
+/// concatenation keeps samples at other places (the kept samples end on the *last* sample of
+/// the whole signal) and filters across the joints between runs, so a force decimated run by
+/// run and regressors decimated after concatenation end up shifted against each other. With
+/// this helper every column built from the same runs has the same length, `sum of
+/// ceil(n_i / r)`, and sample `j` of every column comes from the same instant.
+pub fn decimate_each<S: AsRef<[f64]>>(runs: &[S], r: usize) -> Result<Vec<f64>, SignalError> {
+    if r == 0 {
+        return Err(SignalError::Factor);
+    }
+    let total = runs
+        .iter()
+        .map(|x| decimated_len(x.as_ref().len(), r))
+        .sum();
+    let mut out = Vec::with_capacity(total);
+    for x in runs {
+        out.extend(decimate(x.as_ref(), r));
+    }
+    Ok(out)
+}
+
 /// Central differences `(x[k+1] - x[k-1]) / (2 dt)`, one-sided at the ends.
 pub fn diff_central(x: &[f64], dt: f64) -> Vec<f64> {
     let n = x.len();
@@ -288,6 +393,68 @@ pub fn diff2_central(x: &[f64], dt: f64) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn slow_sampling_and_short_runs_do_not_panic() {
+        // 200 Hz data with a 100 Hz cut-off: wn = 1, nothing to filter
+        let x: Vec<f64> = (0..5).map(|k| k as f64).collect();
+        assert_eq!(butter(4, 1.0), Filter::identity());
+        assert_eq!(butter(4, 1.0).filtfilt(&x), x);
+        assert_eq!(
+            try_butter(4, 1.0),
+            Err(SignalError::Cutoff { wn: 1.0 }),
+            "the fallible constructor says why"
+        );
+        assert!(matches!(
+            try_butter(4, f64::NAN),
+            Err(SignalError::Cutoff { .. })
+        ));
+        assert_eq!(try_butter(0, 0.5), Err(SignalError::Order { order: 0 }));
+        assert!(try_cheby1(8, 0.05, 0.2).is_ok());
+        assert!(try_cheby1(8, -1.0, 0.2).is_err());
+        for n in 0..4 {
+            let y: Vec<f64> = (0..n).map(|k| k as f64).collect();
+            assert_eq!(decimate(&y, 10).len(), decimated_len(n, 10));
+            assert_eq!(butter(4, 0.2).filtfilt(&y).len(), n);
+            assert_eq!(diff_central(&y, 0.01).len(), n);
+            assert_eq!(diff2_central(&y, 0.01).len(), n);
+        }
+        // a hand-made degenerate filter does not index out of bounds
+        let empty = Filter {
+            b: vec![],
+            a: vec![],
+        };
+        assert_eq!(empty.filtfilt(&x).len(), x.len());
+    }
+
+    #[test]
+    fn decimate_each_keeps_runs_aligned() {
+        // two runs of different lengths: a ramp (time index) and its double, decimated per
+        // run, stay in the ratio 2 sample by sample; decimating the concatenation would not
+        // even give the same length
+        let runs: Vec<Vec<f64>> = vec![
+            (0..1005).map(|k| k as f64).collect(),
+            (0..998).map(|k| 1000.0 + k as f64).collect(),
+        ];
+        let doubled: Vec<Vec<f64>> = runs
+            .iter()
+            .map(|r| r.iter().map(|v| 2.0 * v).collect())
+            .collect();
+        let a = decimate_each(&runs, 10).unwrap();
+        let b = decimate_each(&doubled, 10).unwrap();
+        assert_eq!(a.len(), decimated_len(1005, 10) + decimated_len(998, 10));
+        assert_eq!(a.len(), 101 + 100);
+        assert_eq!(a.len(), b.len());
+        for (x, y) in a.iter().zip(&b) {
+            assert!((2.0 * x - y).abs() < 1e-6 * y.abs().max(1.0), "{x} {y}");
+        }
+        let concat: Vec<f64> = runs.concat();
+        // decimating the concatenation keeps other instants (here 2 samples earlier)
+        let c = decimate(&concat, 10);
+        assert!((a[50] - c[50]).abs() > 1.0, "{} {}", a[50], c[50]);
+        assert_eq!(decimate_each(&runs, 0), Err(SignalError::Factor));
+        assert_eq!(decimate_each(&runs, 1).unwrap(), concat);
+    }
 
     #[test]
     fn butter_matches_matlab_coefficients() {

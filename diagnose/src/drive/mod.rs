@@ -9,7 +9,7 @@
 //! 3. [`score`]: every structure is simulated from the recorded input with the hybrid
 //!    single-axis model (`crane_ident::simulate`) and scored by the position NMAE of the
 //!    held-out runs.
-//! 4. [`select`]: forward selection of [`cause::DriveCause`]s: a cause is kept when it cuts the
+//! 4. [`select`]: forward selection of the [`cause::DRIVE_CAUSES`]: a cause is kept when it cuts the
 //!    held-out simulated NMAE by at least [`select::MIN_GAIN`] and its parameters are physical.
 //! 5. [`plots`]: measured vs simulated runs, residuals, stick/slip marks, force vs velocity.
 
@@ -20,7 +20,7 @@ pub mod prep;
 pub mod score;
 pub mod select;
 
-pub use cause::DriveCause;
+pub use cause::DRIVE_CAUSES;
 pub use estimate::{Dir, Estimate, Flag, Structure};
 pub use prep::{DriveRun, Prepared, Thresholds};
 pub use select::{diagnose_drive, DriveInfo};

@@ -1,12 +1,12 @@
 //! Stage 4: the baseline, the candidate causes, forward selection, and the report.
 
-use super::cause::DriveCause;
+use super::cause::DRIVE_CAUSES;
 use super::estimate::{estimate, Dir, Estimate, Flag, Structure};
 use super::prep::{moves, DriveRun, Prepared, Thresholds};
 use super::score::{nmae, nmae_no_motion, score, simulate, Scored};
 use crate::{
-    AxisError, Candidate, DiagnoseError, DiagnoseOptions, Evidence, FinalModel, Finding,
-    HeldoutSimulation, Report, RunSimulation,
+    AxisError, Candidate, Cause, DiagnoseError, DiagnoseOptions, Evidence, FinalModel, Finding,
+    HeldoutSimulation, Report, RunSimulation, Verdict,
 };
 use crane_model::drive::{Motion, PositionForce};
 use std::collections::BTreeMap;
@@ -31,6 +31,9 @@ pub struct DriveInfo {
     pub force_unit: String,
     /// Start from a symmetric baseline (one kinetic and one viscous coefficient).
     pub symmetric: bool,
+    /// What the loader noticed or did to the runs (resampling, held channels), one line
+    /// each; reported with the final model's flags.
+    pub load_notes: Vec<String>,
 }
 
 /// Diagnoses single-axis runs (open loop: the recorded input drives the model).
@@ -98,13 +101,13 @@ pub fn diagnose_drive(
         .flat_map(|p| p.run.u.iter())
         .fold(0.0f64, |m, u| m.max(u.abs()));
     let mut current = baseline.clone();
-    let mut used: Vec<DriveCause> = Vec::new();
+    let mut used: Vec<Cause> = Vec::new();
     let mut findings = Vec::new();
     let mut candidates = Vec::new();
-    let mut notes: BTreeMap<&'static str, String> = BTreeMap::new();
-    for _round in 0..DriveCause::ALL.len() {
-        let mut best: Option<(DriveCause, Scored, Option<String>)> = None;
-        for cause in DriveCause::ALL {
+    let mut notes: BTreeMap<Cause, String> = BTreeMap::new();
+    for _round in 0..DRIVE_CAUSES.len() {
+        let mut best: Option<(Cause, Scored, Option<String>)> = None;
+        for cause in DRIVE_CAUSES {
             if used.contains(&cause) {
                 continue;
             }
@@ -115,7 +118,7 @@ pub fn diagnose_drive(
             let gain = 1.0 - scored.selection / current.selection;
             let supported = ok && gain >= MIN_GAIN;
             candidates.push(Candidate {
-                cause: cause.as_str().into(),
+                cause,
                 axis: "axis".into(),
                 parameters: cause_parameters(cause, &scored.est),
                 score: (scored.selection / current.selection).ln(),
@@ -124,11 +127,11 @@ pub fn diagnose_drive(
             });
             if !ok {
                 if let Some(w) = why {
-                    notes.insert(cause.as_str(), w);
+                    notes.insert(cause, w);
                 }
                 continue;
             }
-            notes.remove(cause.as_str());
+            notes.remove(&cause);
             if supported
                 && best
                     .as_ref()
@@ -154,7 +157,7 @@ pub fn diagnose_drive(
             note.push_str(&e);
         }
         findings.push(Finding {
-            cause: cause.as_str().into(),
+            cause,
             axis: "axis".into(),
             parameters: cause_parameters(cause, &scored.est),
             nmae_before: current.selection,
@@ -187,10 +190,10 @@ pub fn diagnose_drive(
                 final_.selection
             ));
         }
-        (f.cause.clone(), r)
+        (Verdict::Found(f.cause), r)
     } else if baseline.selection <= NONE_LEVEL {
         (
-            "none".to_string(),
+            Verdict::None,
             format!(
                 "the baseline's held-out simulated position NMAE is {:.2} % (<= {NONE_LEVEL} %)",
                 baseline.selection
@@ -198,7 +201,7 @@ pub fn diagnose_drive(
         )
     } else {
         (
-            "unexplained".to_string(),
+            Verdict::Unexplained,
             format!(
                 "the baseline's held-out simulated position NMAE is {:.2} % (predicting no motion: {:.2} %) and no candidate cuts it by {:.0} % with physical parameters",
                 baseline.selection,
@@ -266,7 +269,8 @@ pub fn diagnose_drive(
             })
             .collect(),
     };
-    let mut flags: Vec<String> = final_.est.flags.iter().map(Flag::to_string).collect();
+    let mut flags: Vec<String> = info.load_notes.clone();
+    flags.extend(final_.est.flags.iter().map(Flag::to_string));
     flags.extend(notes.into_values());
     let final_model = final_model(&final_.est, info, &flags);
     if let Some(dir) = &opts.plots_dir {
@@ -303,7 +307,7 @@ fn finite_or_zero(x: f64) -> f64 {
 /// Fits and scores the current structure plus one cause; for grid-searched causes the best
 /// grid point, with a note when it lies at the grid's edge.
 fn try_cause(
-    cause: DriveCause,
+    cause: Cause,
     current: &Scored,
     fit_and_score: &dyn Fn(Structure) -> Result<Scored, String>,
     umax: f64,
@@ -311,20 +315,20 @@ fn try_cause(
     let s = current.est.structure;
     let one = |s: Structure| fit_and_score(s).ok().map(|r| (r, None));
     match cause {
-        DriveCause::RestoringForce if !s.restoring => one(Structure {
+        Cause::RestoringForce if !s.restoring => one(Structure {
             restoring: true,
             ..s
         }),
-        DriveCause::Stiction if !s.stiction => one(Structure {
+        Cause::Stiction if !s.stiction => one(Structure {
             stiction: true,
             ..s
         }),
-        DriveCause::DirectionAsymmetry if !s.asymmetric => one(Structure {
+        Cause::DirectionAsymmetry if !s.asymmetric => one(Structure {
             asymmetric: true,
             ..s
         }),
-        DriveCause::ForceOffset if !s.offset => one(Structure { offset: true, ..s }),
-        DriveCause::InputDeadzone if s.deadband == 0.0 && umax > 0.0 => {
+        Cause::ForceOffset if !s.offset => one(Structure { offset: true, ..s }),
+        Cause::InputDeadzone if s.deadband == 0.0 && umax > 0.0 => {
             let mut best: Option<(usize, Scored)> = None;
             for (k, f) in DEADBAND_GRID.iter().enumerate() {
                 if let Ok(r) = fit_and_score(Structure {
@@ -342,7 +346,7 @@ fn try_cause(
                 (r, edge)
             })
         }
-        DriveCause::InputDelay if s.delay == 0 => {
+        Cause::InputDelay if s.delay == 0 => {
             let mut best: Option<(usize, Scored)> = None;
             for d in 1..=MAX_DELAY {
                 if let Ok(r) = fit_and_score(Structure { delay: d, ..s }) {
@@ -363,10 +367,10 @@ fn try_cause(
 }
 
 /// Whether a cause's fitted parameters are physical; otherwise why not.
-fn physical(cause: DriveCause, est: &Estimate, before: &Estimate) -> (bool, Option<String>) {
+fn physical(cause: Cause, est: &Estimate, before: &Estimate) -> (bool, Option<String>) {
     let p = &est.params;
     match cause {
-        DriveCause::RestoringForce => {
+        Cause::RestoringForce => {
             let k = stiffness(&p.position_force);
             if k > 0.0 {
                 (true, None)
@@ -377,7 +381,7 @@ fn physical(cause: DriveCause, est: &Estimate, before: &Estimate) -> (bool, Opti
                 )
             }
         }
-        DriveCause::Stiction => {
+        Cause::Stiction => {
             // named only when the mean gap between the onset level of the slips and their
             // sliding friction exceeds the run-to-run scatter of the breakaway levels
             let mut named = false;
@@ -414,10 +418,12 @@ fn physical(cause: DriveCause, est: &Estimate, before: &Estimate) -> (bool, Opti
                 )
             }
         }
-        DriveCause::DirectionAsymmetry => (true, None),
-        DriveCause::ForceOffset => (p.offset.is_finite(), None),
-        DriveCause::InputDeadzone => (est.structure.deadband > before.structure.deadband, None),
-        DriveCause::InputDelay => (est.structure.delay > 0, None),
+        Cause::DirectionAsymmetry => (true, None),
+        Cause::ForceOffset => (p.offset.is_finite(), None),
+        Cause::InputDeadzone => (est.structure.deadband > before.structure.deadband, None),
+        Cause::InputDelay => (est.structure.delay > 0, None),
+        // crane-only causes are never tried on a drive
+        Cause::LocalizedFriction | Cause::PayloadMass => (false, None),
     }
 }
 
@@ -437,47 +443,50 @@ fn center_of(f: &PositionForce) -> f64 {
     }
 }
 
-fn extra_parameters(cause: DriveCause) -> usize {
+fn extra_parameters(cause: Cause) -> usize {
     match cause {
-        DriveCause::RestoringForce => 1,
-        DriveCause::Stiction => 2,
-        DriveCause::DirectionAsymmetry => 2,
-        DriveCause::ForceOffset => 1,
-        DriveCause::InputDeadzone => 1,
-        DriveCause::InputDelay => 1,
+        Cause::RestoringForce => 1,
+        Cause::Stiction => 2,
+        Cause::DirectionAsymmetry => 2,
+        Cause::ForceOffset => 1,
+        Cause::InputDeadzone => 1,
+        Cause::InputDelay => 1,
+        Cause::LocalizedFriction => 3,
+        Cause::PayloadMass => 1,
     }
 }
 
-fn cause_parameters(cause: DriveCause, est: &Estimate) -> BTreeMap<String, f64> {
+fn cause_parameters(cause: Cause, est: &Estimate) -> BTreeMap<String, f64> {
     let p = &est.params;
     let mut m = BTreeMap::new();
     let ratio = |b: f64, k: f64| if k > 0.0 { b / k } else { 0.0 };
     match cause {
-        DriveCause::RestoringForce => {
+        Cause::RestoringForce => {
             m.insert("stiffness".into(), stiffness(&p.position_force));
             m.insert("center".into(), center_of(&p.position_force));
         }
-        DriveCause::Stiction => {
+        Cause::Stiction => {
             m.insert("breakaway_pos".into(), p.breakaway_pos);
             m.insert("breakaway_neg".into(), p.breakaway_neg);
             m.insert("ratio_pos".into(), ratio(p.breakaway_pos, p.kinetic_pos));
             m.insert("ratio_neg".into(), ratio(p.breakaway_neg, p.kinetic_neg));
         }
-        DriveCause::DirectionAsymmetry => {
+        Cause::DirectionAsymmetry => {
             m.insert("kinetic_pos".into(), p.kinetic_pos);
             m.insert("kinetic_neg".into(), p.kinetic_neg);
             m.insert("viscous_pos".into(), p.viscous_pos);
             m.insert("viscous_neg".into(), p.viscous_neg);
         }
-        DriveCause::ForceOffset => {
+        Cause::ForceOffset => {
             m.insert("offset".into(), p.offset);
         }
-        DriveCause::InputDeadzone => {
+        Cause::InputDeadzone => {
             m.insert("deadband".into(), est.structure.deadband);
         }
-        DriveCause::InputDelay => {
+        Cause::InputDelay => {
             m.insert("delay_samples".into(), est.structure.delay as f64);
         }
+        Cause::LocalizedFriction | Cause::PayloadMass => {}
     }
     m
 }

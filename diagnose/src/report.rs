@@ -1,0 +1,325 @@
+//! The report's types (`REPORT_SCHEMA.md`): what is wrong, the causes found, the evidence,
+//! and for single-axis open-loop data the held-out simulation and the final model.
+
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+use std::collections::BTreeMap;
+use std::fmt;
+
+/// A hidden effect the workbench can name (crane and single-axis data alike).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Cause {
+    /// Friction raised or lowered over a stretch of the travel (crane data).
+    LocalizedFriction,
+    /// Breakaway above sliding friction (static > kinetic).
+    Stiction,
+    /// Friction that depends on the direction of motion.
+    DirectionAsymmetry,
+    /// A constant force added to the drive force.
+    ForceOffset,
+    /// An input dead band.
+    InputDeadzone,
+    /// An input delay.
+    InputDelay,
+    /// A payload heavier or lighter than declared (crane data).
+    PayloadMass,
+    /// A position-dependent restoring force: gravity on a joint, a spring, a cable
+    /// (single-axis data).
+    RestoringForce,
+}
+
+impl Cause {
+    /// Every cause.
+    pub const ALL: [Cause; 8] = [
+        Cause::LocalizedFriction,
+        Cause::Stiction,
+        Cause::DirectionAsymmetry,
+        Cause::ForceOffset,
+        Cause::InputDeadzone,
+        Cause::InputDelay,
+        Cause::PayloadMass,
+        Cause::RestoringForce,
+    ];
+
+    /// The report name (`snake_case`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Cause::LocalizedFriction => "localized_friction",
+            Cause::Stiction => "stiction",
+            Cause::DirectionAsymmetry => "direction_asymmetry",
+            Cause::ForceOffset => "force_offset",
+            Cause::InputDeadzone => "input_deadzone",
+            Cause::InputDelay => "input_delay",
+            Cause::PayloadMass => "payload_mass",
+            Cause::RestoringForce => "restoring_force",
+        }
+    }
+}
+
+impl fmt::Display for Cause {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl PartialEq<&str> for Cause {
+    fn eq(&self, other: &&str) -> bool {
+        self.as_str() == *other
+    }
+}
+
+/// The report's conclusion.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Verdict {
+    /// The strongest supported cause.
+    Found(Cause),
+    /// The baseline is right within the noise: nothing to explain.
+    None,
+    /// The baseline is wrong and no candidate explains it.
+    Unexplained,
+}
+
+impl Verdict {
+    /// The report name: the cause's name, `none` or `unexplained`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Verdict::Found(c) => c.as_str(),
+            Verdict::None => "none",
+            Verdict::Unexplained => "unexplained",
+        }
+    }
+}
+
+impl fmt::Display for Verdict {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl PartialEq<&str> for Verdict {
+    fn eq(&self, other: &&str) -> bool {
+        self.as_str() == *other
+    }
+}
+
+impl Serialize for Verdict {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.as_str())
+    }
+}
+
+impl<'de> Deserialize<'de> for Verdict {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let name = String::deserialize(d)?;
+        match name.as_str() {
+            "none" => Ok(Verdict::None),
+            "unexplained" => Ok(Verdict::Unexplained),
+            other => Cause::ALL
+                .into_iter()
+                .find(|c| c.as_str() == other)
+                .map(Verdict::Found)
+                .ok_or_else(|| serde::de::Error::custom(format!("unknown verdict `{other}`"))),
+        }
+    }
+}
+
+/// Evidence behind a finding.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Evidence {
+    /// Held-out BIC-like change of the inverse-dynamics force residual
+    /// `n ln(SSE_after / SSE_before) + k ln n` (negative supports the extension).
+    pub force_delta_bic: f64,
+    /// Held-out RMS inverse-dynamics force residual before / after [N] (affected axis).
+    pub force_rms_before_n: f64,
+    /// Same after the extension [N].
+    pub force_rms_after_n: f64,
+    /// Held-out score used for the ranking (crane: sum over axes of the log ratio of the
+    /// simulated NMAE after / before, each floored at the noise level, plus the parameter
+    /// penalty; single-axis: `force_delta_bic / n`); lower is stronger.
+    pub score: f64,
+    /// Extra parameters of the extension.
+    pub extra_parameters: usize,
+    /// Held-out samples used (after masking and decimation, affected axis).
+    pub held_out_samples: usize,
+    /// Whether the finding can be told apart from a change of the baseline itself.
+    pub identifiable: bool,
+    /// Explanation (equivalences, caveats).
+    pub note: String,
+}
+
+/// One supported cause.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Finding {
+    /// The cause.
+    pub cause: Cause,
+    /// `x`, `y`, `l`, or `axis` for single-axis data.
+    pub axis: String,
+    /// Estimated parameters, SI.
+    pub parameters: BTreeMap<String, f64>,
+    /// Held-out NMAE of the axis before the extension [%].
+    pub nmae_before: f64,
+    /// Held-out NMAE of the axis after the extension [%].
+    pub nmae_after: f64,
+    /// Evidence.
+    pub evidence: Evidence,
+}
+
+/// Baseline error of one axis.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AxisError {
+    /// Axis name.
+    pub axis: String,
+    /// NMAE on the fitting part [%].
+    pub nmae_fit: f64,
+    /// NMAE on the held-out part [%].
+    pub nmae_held_out: f64,
+    /// Noise level of the NMAE [%] (crane: encoder quantisation); below it nothing is claimed.
+    pub nmae_noise: f64,
+    /// RMS inverse-dynamics force residual on the fitting part [N].
+    pub force_rms_fit_n: f64,
+    /// RMS inverse-dynamics force residual on the held-out part [N].
+    pub force_rms_held_out_n: f64,
+    /// Relative force error `100 ||F - F_model|| / ||F||` on the held-out part [%].
+    pub force_rel_err_held_out_pct: f64,
+}
+
+/// Every candidate tried, for transparency.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Candidate {
+    /// Cause.
+    pub cause: Cause,
+    /// Axis.
+    pub axis: String,
+    /// Fitted parameters.
+    pub parameters: BTreeMap<String, f64>,
+    /// Ranking score (see [`Evidence::score`]).
+    pub score: f64,
+    /// Held-out force BIC change.
+    pub force_delta_bic: f64,
+    /// Whether it passed the support thresholds.
+    pub supported: bool,
+}
+
+/// The report (`REPORT_SCHEMA.md`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// Data-set directory.
+    pub dataset: String,
+    /// `crane` or `single_axis`.
+    pub data: String,
+    /// Baseline description.
+    pub baseline: String,
+    /// How runs were split into fitting and held-out parts.
+    pub split: String,
+    /// Baseline error per axis.
+    pub baseline_errors: Vec<AxisError>,
+    /// Supported causes, strongest first.
+    pub findings: Vec<Finding>,
+    /// The first finding's cause, or `none` / `unexplained`.
+    pub verdict: Verdict,
+    /// Why the verdict.
+    pub verdict_reason: String,
+    /// Every candidate tried.
+    pub candidates: Vec<Candidate>,
+    /// Extra numbers of the single-axis pipeline (published-measure comparisons).
+    #[serde(skip_serializing_if = "BTreeMap::is_empty", default)]
+    pub measures: BTreeMap<String, f64>,
+    /// Single-axis open-loop data: the held-out runs simulated from their recorded input with
+    /// the baseline and with the final model.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub heldout_simulation: Option<HeldoutSimulation>,
+    /// Single-axis open-loop data: the final model (baseline plus every finding).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub final_model: Option<FinalModel>,
+}
+
+/// Held-out runs simulated from their recorded input (position NMAE: mean absolute error over
+/// the measured run's position range) [%].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HeldoutSimulation {
+    /// Mean over held-out runs, baseline [%].
+    pub nmae_before: f64,
+    /// Mean over held-out runs, final model [%].
+    pub nmae_after: f64,
+    /// Mean over held-out runs of predicting no motion at all (the first position) [%].
+    pub nmae_no_motion: f64,
+    /// Mean over the held-out runs in which the axis moves (beyond pre-sliding), baseline [%]:
+    /// the measure the causes are selected by (runs that stay at rest cannot tell friction
+    /// models apart).
+    pub moving_nmae_before: f64,
+    /// Same, final model [%].
+    pub moving_nmae_after: f64,
+    /// Same, predicting no motion [%].
+    pub moving_nmae_no_motion: f64,
+    /// Per held-out run.
+    pub runs: Vec<RunSimulation>,
+}
+
+/// One held-out run's simulated position error [%].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RunSimulation {
+    /// Run file.
+    pub file: String,
+    /// Baseline [%].
+    pub nmae_before: f64,
+    /// Final model [%].
+    pub nmae_after: f64,
+    /// Predicting no motion [%].
+    pub nmae_no_motion: f64,
+    /// Whether the measured axis moves in this run (faster than the motion threshold).
+    pub moves: bool,
+}
+
+/// The final single-axis model, in SI units or, when the input gain is unknown, in input
+/// units (`force_unit`). Friction magnitudes are >= 0; `breakaway_*` are net of the modelled
+/// position force, at first motion.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FinalModel {
+    /// Unit of positions (`m` or `rad`).
+    pub position_unit: String,
+    /// Unit of forces (`N`, `N m`, or the input unit).
+    pub force_unit: String,
+    /// Inertia [force unit per (position unit / s^2)].
+    pub inertia: f64,
+    /// Breakaway level towards positive [force unit].
+    pub breakaway_pos: f64,
+    /// Breakaway level towards negative (magnitude) [force unit].
+    pub breakaway_neg: f64,
+    /// Kinetic friction moving positive [force unit].
+    pub kinetic_pos: f64,
+    /// Kinetic friction moving negative (magnitude) [force unit].
+    pub kinetic_neg: f64,
+    /// Viscous friction moving positive [force unit per (position unit / s)].
+    pub viscous_pos: f64,
+    /// Viscous friction moving negative [force unit per (position unit / s)].
+    pub viscous_neg: f64,
+    /// Restoring stiffness [force unit per position unit] (0 when none).
+    pub stiffness: f64,
+    /// Centre of the restoring force [position unit].
+    pub center: f64,
+    /// Constant force offset [force unit].
+    pub offset: f64,
+    /// Input dead band [input units].
+    pub deadband: f64,
+    /// Input delay [samples].
+    pub delay_samples: usize,
+    /// Scatter (standard deviation) of the breakaway levels at every rest-to-motion onset of
+    /// the fitting runs, positive direction [force unit] (0 when unknown).
+    pub breakaway_scatter_pos: f64,
+    /// Same, negative direction.
+    pub breakaway_scatter_neg: f64,
+    /// Net force at first motion per fitting run, positive direction [force unit].
+    pub first_motion_pos: Vec<f64>,
+    /// Same, negative direction (magnitudes).
+    pub first_motion_neg: Vec<f64>,
+    /// What the estimator had to decide (parameters at a bound, directions not fitted,
+    /// causes not named and why).
+    pub flags: Vec<String>,
+}
+
+impl Report {
+    /// Pretty JSON.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).unwrap_or_default()
+    }
+}

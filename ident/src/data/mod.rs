@@ -1,0 +1,540 @@
+//! The data format: runs as CSV files, a data set as a directory of runs plus `dataset.toml`.
+//! See `DATA_FORMAT.md` next to `Cargo.toml` for the user-facing description.
+//!
+//! - [`csv`]: CSV text to a numeric [`Table`] with file lines;
+//! - [`spec`]: `dataset.toml` ([`DatasetSpec`]) and its plausible ranges;
+//! - [`units`]: position and input units, the input [`Gain`];
+//! - [`timebase`]: time-stamp checks, held channels, zero-order-hold resampling;
+//! - [`error`]: located errors ([`DataError`]: file, line, column).
+
+pub mod csv;
+pub mod error;
+pub mod spec;
+pub mod timebase;
+pub mod units;
+
+pub use csv::{parse_table, read_table, Table};
+pub use error::{clip, DataError, Location, MissingColumn, Problem, Timing};
+pub use spec::{
+    parse_spec, BreakawayNoise, Constants, ControllerSpec, DatasetSpec, RunKind, RunSpec,
+    VelocityEstimate,
+};
+pub use timebase::{Irregularity, LoadNote, TimeBase};
+pub use units::{Gain, InputUnit, PositionUnit};
+
+use error::err;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Name of the data set description inside a data set directory.
+pub const DATASET_FILE: &str = "dataset.toml";
+
+/// Samples of a crane run (all columns of equal length).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CraneRun {
+    /// Time [s], strictly increasing.
+    pub t: Vec<f64>,
+    /// Voltages `u_x, u_y, u_l` [V].
+    pub u: [Vec<f64>; 3],
+    /// Rail position [m].
+    pub x: Vec<f64>,
+    /// Trolley position [m].
+    pub y: Vec<f64>,
+    /// Rope length [m].
+    pub l: Vec<f64>,
+    /// Swing angle alpha [rad].
+    pub alpha: Vec<f64>,
+    /// Swing angle beta [rad].
+    pub beta: Vec<f64>,
+}
+
+impl CraneRun {
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+    /// No samples.
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+    /// Mean sampling period [s].
+    pub fn dt(&self) -> f64 {
+        mean_dt(&self.t)
+    }
+    /// Drive position of axis 0 (x), 1 (y), 2 (l).
+    pub fn pos(&self, axis: usize) -> &[f64] {
+        match axis {
+            0 => &self.x,
+            1 => &self.y,
+            _ => &self.l,
+        }
+    }
+}
+
+/// Signals of a closed-loop single-axis run, for the declared controller
+/// ([`ControllerSpec`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LoopSignals {
+    /// Reference position `r` [m or rad, the run's position unit].
+    pub reference: Vec<f64>,
+    /// Input added after the saturation [input units]; zeros when none is declared.
+    pub added_input: Vec<f64>,
+}
+
+/// Samples of a single-axis run on a uniform time grid, with its units and what the loader
+/// did to it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct AxisRun {
+    /// Time [s], strictly increasing and uniform within [`timebase::JITTER_TOLERANCE`]
+    /// (resampled when the file's stamps were not, see `notes`).
+    pub t: Vec<f64>,
+    /// Position [m or rad: `position_unit`].
+    pub x: Vec<f64>,
+    /// Drive effort `gain * u` [N or N m] when the gain is known, else `u` itself [input
+    /// units].
+    pub force: Vec<f64>,
+    /// Recorded input [input units: `input_unit`].
+    pub u: Vec<f64>,
+    /// Unit of `x`.
+    pub position_unit: PositionUnit,
+    /// Unit of `u`.
+    pub input_unit: InputUnit,
+    /// Gain from `u` to the effort.
+    pub gain: Gain,
+    /// Reference and added input, when the data set declares a controller.
+    pub closed_loop: Option<LoopSignals>,
+    /// What the loader noticed or did (resampling, held channels).
+    pub notes: Vec<LoadNote>,
+}
+
+impl AxisRun {
+    /// Mean sampling period [s] (the grid step: the loader guarantees a uniform grid).
+    pub fn dt(&self) -> f64 {
+        mean_dt(&self.t)
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    /// No samples.
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+
+    /// The samples in `range` (every per-sample vector cut alike; units, gain and notes
+    /// kept). An out-of-bounds range is clamped.
+    pub fn slice(&self, range: std::ops::Range<usize>) -> AxisRun {
+        let end = range.end.min(self.t.len());
+        let start = range.start.min(end);
+        let cut = |v: &[f64]| v.get(start..end).unwrap_or_default().to_vec();
+        AxisRun {
+            t: cut(&self.t),
+            x: cut(&self.x),
+            force: cut(&self.force),
+            u: cut(&self.u),
+            position_unit: self.position_unit,
+            input_unit: self.input_unit,
+            gain: self.gain,
+            closed_loop: self.closed_loop.as_ref().map(|c| LoopSignals {
+                reference: cut(&c.reference),
+                added_input: cut(&c.added_input),
+            }),
+            notes: self.notes.clone(),
+        }
+    }
+
+    /// Unit of the effort `force`: `N`/`N m` when the gain is known, else the input unit.
+    pub fn effort_unit(&self) -> &'static str {
+        match self.gain {
+            Gain::Known(_) => self.position_unit.effort_unit().symbol(),
+            Gain::Unknown => self.input_unit.symbol(),
+        }
+    }
+
+    /// Whether the loader resampled the run (irregular time stamps).
+    pub fn resampled(&self) -> bool {
+        self.notes
+            .iter()
+            .any(|n| matches!(n, LoadNote::Resampled { .. }))
+    }
+
+    /// Largest number of rows between refreshes of a held channel (1 when none is held):
+    /// differences over fewer samples than this see the holds, not the motion.
+    pub fn refresh_rows(&self) -> usize {
+        self.notes
+            .iter()
+            .filter_map(|n| match n {
+                LoadNote::HeldChannel {
+                    rows_per_refresh, ..
+                } => Some(*rows_per_refresh),
+                _ => None,
+            })
+            .max()
+            .unwrap_or(1)
+    }
+}
+
+fn mean_dt(t: &[f64]) -> f64 {
+    if t.len() < 2 {
+        return f64::NAN;
+    }
+    (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64
+}
+
+/// The samples of a run.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Samples {
+    /// Crane run.
+    Crane(CraneRun),
+    /// Single-axis run.
+    Axis(AxisRun),
+}
+
+/// A loaded run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Run {
+    /// File name (as in `dataset.toml`).
+    pub name: String,
+    /// Kind of experiment.
+    pub kind: RunKind,
+    /// Payload [kg].
+    pub payload_kg: f64,
+    /// Samples.
+    pub samples: Samples,
+}
+
+impl Run {
+    /// The crane samples, if a crane run.
+    pub fn crane(&self) -> Option<&CraneRun> {
+        match &self.samples {
+            Samples::Crane(c) => Some(c),
+            Samples::Axis(_) => None,
+        }
+    }
+    /// The single-axis samples, if a single-axis run.
+    pub fn axis(&self) -> Option<&AxisRun> {
+        match &self.samples {
+            Samples::Axis(a) => Some(a),
+            Samples::Crane(_) => None,
+        }
+    }
+}
+
+/// A loaded data set.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Dataset {
+    /// Directory.
+    pub dir: PathBuf,
+    /// Its description.
+    pub spec: DatasetSpec,
+    /// Runs in the order of `dataset.toml` (or file-name order).
+    pub runs: Vec<Run>,
+}
+
+impl Dataset {
+    /// Runs of a kind.
+    pub fn of_kind(&self, kind: RunKind) -> impl Iterator<Item = &Run> {
+        self.runs.iter().filter(move |r| r.kind == kind)
+    }
+}
+
+/// Checks a run's time stamps: the row index and problem become a located error.
+fn time_base(
+    table: &Table,
+    renames: &BTreeMap<String, String>,
+) -> Result<(Vec<f64>, TimeBase), DataError> {
+    let t = table.take("t", renames, Some((-1e9, 1e9, "s")))?;
+    match timebase::check_time(&t, &table.lines) {
+        Ok(tb) => Ok((t, tb)),
+        Err((_, Problem::TooShort)) => Err(err(&table.file, None, None, Problem::TooShort)),
+        Err((k, p)) => Err(table.at(k, "t", renames, p)),
+    }
+}
+
+/// Reads a crane run. Plausible ranges (a value outside is almost surely a wrong unit):
+/// voltages within +-12 V (the amplifier's saturation), `x` in [-0.05, 0.555] m, `y` in
+/// [-0.05, 0.675] m, `l` in [0.05, 1.0] m, `alpha` in (0, pi) rad, `beta` in [-pi/2, pi/2]
+/// rad. Time must be uniform (within [`timebase::JITTER_TOLERANCE`]): a crane run is never
+/// resampled.
+pub fn crane_run(table: &Table, renames: &BTreeMap<String, String>) -> Result<CraneRun, DataError> {
+    use core::f64::consts::{FRAC_PI_2, PI};
+    let (t, tb) = time_base(table, renames)?;
+    if let TimeBase::Irregular(why) = tb {
+        let idx = table.find("t", renames);
+        return Err(err(
+            &table.file,
+            Some(why.line),
+            idx.map(|i| (table.header[i].as_str(), i + 1)),
+            Problem::Timing(Timing::IrregularCrane {
+                step_s: why.step_s,
+                median_step_s: why.median_step_s,
+                irregular_steps: why.irregular_steps,
+            }),
+        ));
+    }
+    let v = Some((-12.0 - 1e-9, 12.0 + 1e-9, "V"));
+    Ok(CraneRun {
+        t,
+        u: [
+            table.take("u_x", renames, v)?,
+            table.take("u_y", renames, v)?,
+            table.take("u_l", renames, v)?,
+        ],
+        x: table.take("x", renames, Some((-0.05, 0.555, "m")))?,
+        y: table.take("y", renames, Some((-0.05, 0.675, "m")))?,
+        l: table.take("l", renames, Some((0.05, 1.0, "m")))?,
+        alpha: table.take("alpha", renames, Some((1e-9, PI - 1e-9, "rad")))?,
+        beta: table.take("beta", renames, Some((-FRAC_PI_2, FRAC_PI_2, "rad")))?,
+    })
+}
+
+/// Reads a single-axis run: `t`, `x` and either `force` (an effort: N or N m, gain 1) or `u`
+/// in `ds.input_unit` with the run's gain; with a declared controller, its reference and
+/// added-input columns. Irregular time stamps are resampled (zero-order hold) or refused,
+/// held channels noted (`timebase`).
+pub fn axis_run(
+    table: &Table,
+    renames: &BTreeMap<String, String>,
+    ds: &DatasetSpec,
+    run: Option<&RunSpec>,
+) -> Result<AxisRun, DataError> {
+    let (t, tb) = time_base(table, renames)?;
+    let position_unit = ds.position_unit;
+    let (plo, phi) = position_unit.range();
+    let xr = Some((plo, phi, position_unit.symbol()));
+    let x = table.take("x", renames, xr)?;
+    let (u_name, input_unit, gain) = if table.find("force", renames).is_some() {
+        let effort = position_unit.effort_unit();
+        if let Some(iu) = ds.input_unit.filter(|iu| *iu != effort) {
+            return Err(err(
+                &table.file,
+                None,
+                None,
+                Problem::BadValue(format!(
+                    "a `force` column is an effort in `{}`, but dataset.toml declares \
+                     input_unit = \"{}\": name the column `u`, or drop input_unit",
+                    effort.symbol(),
+                    iu.symbol()
+                )),
+            ));
+        }
+        ("force", effort, Gain::Known(1.0))
+    } else if table.find("u", renames).is_some() {
+        ("u", ds.input_unit(), ds.gain(run))
+    } else {
+        let mut e = table.missing("u", renames);
+        if let Problem::MissingColumn(m) = &mut e.problem {
+            m.wanted = format!("{} (or `force`)", m.wanted);
+        }
+        return Err(e);
+    };
+    let (ulo, uhi) = input_unit.range();
+    let u = table.take(u_name, renames, Some((ulo, uhi, input_unit.symbol())))?;
+    let force = match gain {
+        Gain::Known(g) if g != 1.0 => {
+            let mut f = Vec::with_capacity(u.len());
+            for (k, &v) in u.iter().enumerate() {
+                let y = g * v;
+                if !y.is_finite() {
+                    return Err(table.at(
+                        k,
+                        u_name,
+                        renames,
+                        Problem::NotFinite(format!("gain {g} * u {v} overflows")),
+                    ));
+                }
+                f.push(y);
+            }
+            f
+        }
+        _ => u.clone(),
+    };
+    let closed_loop = match &ds.controller {
+        None => None,
+        Some(c) => {
+            let ident = BTreeMap::new();
+            let reference = table.take(&c.reference, &ident, xr)?;
+            // a run without the added-input column had nothing added (EMPS: only the
+            // validation run has pulses)
+            let added_input = match &c.added_input {
+                Some(name) if table.find(name, &ident).is_some() => {
+                    table.take(name, &ident, Some((ulo, uhi, input_unit.symbol())))?
+                }
+                _ => vec![0.0; t.len()],
+            };
+            Some(LoopSignals {
+                reference,
+                added_input,
+            })
+        }
+    };
+    let mut notes = Vec::new();
+    for (name, col) in [("x", &x), (u_name, &u)] {
+        if let Some((rows_per_refresh, repeated_share)) = timebase::held_channel(col) {
+            let idx = table.find(name, renames).unwrap_or(0);
+            notes.push(LoadNote::HeldChannel {
+                column: clip(&table.header[idx]),
+                rows_per_refresh,
+                repeated_share,
+            });
+        }
+    }
+    let mut out = AxisRun {
+        t,
+        x,
+        force,
+        u,
+        position_unit,
+        input_unit,
+        gain,
+        closed_loop,
+        notes: Vec::new(),
+    };
+    if let TimeBase::Irregular(why) = tb {
+        let h = why.grid_step_s;
+        let (grid, rows) = timebase::zoh_rows(&out.t, h);
+        let rows_in = out.t.len();
+        out = AxisRun {
+            t: grid,
+            x: timebase::pick(&out.x, &rows),
+            force: timebase::pick(&out.force, &rows),
+            u: timebase::pick(&out.u, &rows),
+            closed_loop: out.closed_loop.map(|c| LoopSignals {
+                reference: timebase::pick(&c.reference, &rows),
+                added_input: timebase::pick(&c.added_input, &rows),
+            }),
+            ..out
+        };
+        notes.insert(
+            0,
+            LoadNote::Resampled {
+                why,
+                rows_in,
+                rows_out: rows.len(),
+                step_s: h,
+            },
+        );
+    }
+    out.notes = notes;
+    Ok(out)
+}
+
+impl Table {
+    /// `true` if the table has the crane columns (`u_x` present, after renames).
+    pub fn is_crane(&self, renames: &BTreeMap<String, String>) -> bool {
+        self.find("u_x", renames).is_some()
+    }
+
+    /// Reads a crane run ([`crane_run`]).
+    pub fn crane_run(&self, renames: &BTreeMap<String, String>) -> Result<CraneRun, DataError> {
+        crane_run(self, renames)
+    }
+}
+
+/// Loads one run described by `spec` relative to `dir`, with the data set's defaults.
+pub fn load_run(dir: &Path, ds: &DatasetSpec, spec: &RunSpec) -> Result<Run, DataError> {
+    let path = dir.join(&spec.file);
+    let table = read_table(&path)?;
+    let mut renames = ds.columns.clone();
+    renames.extend(spec.columns.clone());
+    let (samples, payload) = if table.is_crane(&renames) {
+        let payload = spec.payload_kg.or(ds.payload_kg).ok_or_else(|| {
+            err(
+                &path,
+                None,
+                None,
+                Problem::BadValue(
+                    "a crane run needs `payload_kg` (top level of dataset.toml or its [[runs]] \
+                     entry; 0 = unloaded)"
+                        .into(),
+                ),
+            )
+        })?;
+        (Samples::Crane(crane_run(&table, &renames)?), payload)
+    } else {
+        (
+            Samples::Axis(axis_run(&table, &renames, ds, Some(spec))?),
+            spec.payload_kg.or(ds.payload_kg).unwrap_or(0.0),
+        )
+    };
+    Ok(Run {
+        name: spec.file.clone(),
+        kind: spec.kind,
+        payload_kg: payload,
+        samples,
+    })
+}
+
+/// Loads a data set directory: `dataset.toml`, then every run it lists (or every `*.csv` in
+/// file-name order, kind `other`, when it lists none). The first bad file stops the load with
+/// an error naming file, line and column.
+pub fn load_dataset(dir: &Path) -> Result<Dataset, DataError> {
+    let spec_path = dir.join(DATASET_FILE);
+    let text = std::fs::read_to_string(&spec_path)
+        .map_err(|e| err(&spec_path, None, None, Problem::Io(e.to_string())))?;
+    let mut spec = parse_spec(&spec_path, &text)?;
+    if spec.runs.is_empty() {
+        let mut files: Vec<String> = std::fs::read_dir(dir)
+            .map_err(|e| err(dir, None, None, Problem::Io(e.to_string())))?
+            .filter_map(|e| e.ok())
+            .filter_map(|e| e.file_name().into_string().ok())
+            .filter(|n| n.ends_with(".csv"))
+            .collect();
+        files.sort();
+        spec.runs = files
+            .into_iter()
+            .map(|file| RunSpec {
+                file,
+                ..RunSpec::default()
+            })
+            .collect();
+    }
+    let runs = spec
+        .runs
+        .iter()
+        .map(|r| load_run(dir, &spec, r))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(Dataset {
+        dir: dir.to_path_buf(),
+        spec,
+        runs,
+    })
+}
+
+/// Writes a crane run as CSV (header `t,u_x,u_y,u_l,x,y,l,alpha,beta`), with `comment` lines
+/// first (each prefixed by `# `). Values are written with enough digits to round-trip.
+pub fn write_crane_run(path: &Path, run: &CraneRun, comment: &str) -> std::io::Result<()> {
+    use std::fmt::Write as _;
+    let mut s = String::with_capacity(run.len() * 120 + 200);
+    for line in comment.lines() {
+        let _ = writeln!(s, "# {line}");
+    }
+    s.push_str("t,u_x,u_y,u_l,x,y,l,alpha,beta\n");
+    for k in 0..run.len() {
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{},{},{},{}",
+            run.t[k],
+            run.u[0][k],
+            run.u[1][k],
+            run.u[2][k],
+            run.x[k],
+            run.y[k],
+            run.l[k],
+            run.alpha[k],
+            run.beta[k]
+        );
+    }
+    std::fs::write(path, s)
+}
+
+/// Writes `dataset.toml`.
+pub fn write_spec(dir: &Path, spec: &DatasetSpec) -> std::io::Result<()> {
+    let text = toml::to_string_pretty(spec).map_err(std::io::Error::other)?;
+    std::fs::write(
+        dir.join(DATASET_FILE),
+        format!("# Crane data set (format: crane-ident DATA_FORMAT.md)\n{text}"),
+    )
+}

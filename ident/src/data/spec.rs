@@ -1,0 +1,581 @@
+//! `dataset.toml`: the description of a data set, parsed and range-checked.
+
+use super::error::{clip_quoted, err, DataError, Problem};
+use super::units::{Gain, InputUnit, PositionUnit};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// What experiment a run is; decides which identification step uses it.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum RunKind {
+    /// Slow rope voltage ramp from rest, no payload: the rope's dry friction `P3`.
+    RopeQuasistatic,
+    /// Rope motion without payload: `P1`, `P2`.
+    RopeUnloaded,
+    /// Rope motion with a payload: `P4`.
+    RopeLoaded,
+    /// Breakaway voltage ramp on X at rest: one dry-friction sample.
+    BreakawayX,
+    /// Breakaway voltage ramp on Y at rest: one dry-friction sample.
+    BreakawayY,
+    /// X motion (multi-step, chirp): viscous coefficients of X.
+    MotionX,
+    /// Y motion: viscous coefficients of Y.
+    MotionY,
+    /// Free swing with the trolley and rope at rest: `D_alpha`, `D_beta`.
+    FreeSwing,
+    /// Validation run: held out, not used for fitting.
+    Validation,
+    /// Anything else (the default): loaded and checked; fitting data for single-axis sets.
+    #[default]
+    Other,
+}
+
+/// One run's entry in `dataset.toml`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunSpec {
+    /// CSV file, relative to the data set directory.
+    pub file: String,
+    /// Kind of experiment (default `other`).
+    #[serde(default)]
+    pub kind: RunKind,
+    /// Payload of this crane run [kg] (default: the data set's `payload_kg`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub payload_kg: Option<f64>,
+    /// Input gain of this single-axis run [effort per input unit] (TOML key `gain`, alias
+    /// `gain_n_per_v`; default: the data set's).
+    #[serde(
+        default,
+        rename = "gain",
+        alias = "gain_n_per_v",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub gain_n_per_v: Option<f64>,
+    /// Column renames for this run: canonical name -> name in the file.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub columns: BTreeMap<String, String>,
+    /// Free-text note.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
+}
+
+/// Known constants of the crane (defaults: the INTECO rig of the paper).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Constants {
+    /// Trolley mass `m_t` [kg].
+    pub trolley_mass_kg: f64,
+    /// Rail mass `m_r` [kg].
+    pub rail_mass_kg: f64,
+    /// Gravity [m/s^2].
+    pub gravity: f64,
+    /// X drive pulley radius `R_x` [m].
+    pub pulley_radius_x_m: f64,
+    /// Y drive pulley radius `R_y` [m].
+    pub pulley_radius_y_m: f64,
+    /// Rope drum radius `R_l` [m].
+    pub pulley_radius_l_m: f64,
+    /// Encoder pulses per revolution.
+    pub encoder_pulses: f64,
+    /// Travel of X `[min, max]` [m].
+    pub x_range_m: [f64; 2],
+    /// Travel of Y `[min, max]` [m].
+    pub y_range_m: [f64; 2],
+    /// Rope length range `[min, max]` [m].
+    pub l_range_m: [f64; 2],
+}
+
+impl Default for Constants {
+    fn default() -> Self {
+        Constants {
+            trolley_mass_kg: 1.155,
+            rail_mass_kg: 2.20,
+            gravity: 9.81,
+            pulley_radius_x_m: 0.040,
+            pulley_radius_y_m: 0.040,
+            pulley_radius_l_m: 0.015,
+            encoder_pulses: 4096.0,
+            x_range_m: [0.0, 0.505],
+            y_range_m: [0.0, 0.625],
+            l_range_m: [0.13, 0.57],
+        }
+    }
+}
+
+impl Constants {
+    /// Position resolution of coordinate `i` of `[x, y, L, alpha, beta]` for these encoders
+    /// and pulleys [m or rad].
+    pub fn resolution(&self, i: usize) -> f64 {
+        let rev = 2.0 * core::f64::consts::PI / self.encoder_pulses;
+        match i {
+            0 => rev * self.pulley_radius_x_m,
+            1 => rev * self.pulley_radius_y_m,
+            2 => rev * self.pulley_radius_l_m,
+            _ => rev,
+        }
+    }
+}
+
+/// Breakaway-force noise variances [N^2] per axis and direction (defaults: the paper's).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BreakawayNoise {
+    /// X, positive direction.
+    pub x_pos: f64,
+    /// X, negative direction.
+    pub x_neg: f64,
+    /// Y, positive direction.
+    pub y_pos: f64,
+    /// Y, negative direction.
+    pub y_neg: f64,
+}
+
+impl Default for BreakawayNoise {
+    fn default() -> Self {
+        BreakawayNoise {
+            x_pos: 0.026,
+            x_neg: 0.0073,
+            y_pos: 0.0030,
+            y_neg: 0.0056,
+        }
+    }
+}
+
+/// How the controller estimates the velocity from the measured position `q` (sampling period
+/// `dt`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum VelocityEstimate {
+    /// `qdot(k) = (q(k) - q(k-1)) / dt`.
+    #[default]
+    BackwardDifference,
+    /// `qf(k) = (q(k) + q(k-1)) / 2`, `qdot(k) = (qf(k) - qf(k-1)) / dt` (the EMPS rig).
+    AveragedDifference,
+}
+
+/// A position controller declared for closed-loop data (`[controller]`): a P or PD loop with
+/// velocity feedback,
+/// `u(k) = sat(P (r(k) - q(k)) - D qdot(k)) + added(k)`, applied `delay_samples` later,
+/// written either in cascade form (`kp`, `kv`: `P = kv kp`, `D = kv`, the EMPS rig's
+/// `u = kv (kp (r - q) - qdot)`) or in parallel form (`kp`, `kd`: `P = kp`, `D = kd`; `kd = 0`
+/// is a P loop). Gains are in input units per position unit (per position unit per second for
+/// `D`); `r` has the position's unit.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControllerSpec {
+    /// Column holding the reference position `r` (name in the files, after no rename).
+    pub reference: String,
+    /// Cascade form: outer position gain [1/s]; parallel form: proportional gain
+    /// [input unit / position unit].
+    pub kp: f64,
+    /// Cascade form: velocity gain [input unit / (position unit / s)].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kv: Option<f64>,
+    /// Parallel form: derivative gain [input unit / (position unit / s)].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kd: Option<f64>,
+    /// Velocity estimate (default `backward_difference`).
+    #[serde(default)]
+    pub velocity: VelocityEstimate,
+    /// Samples between the controller's output and the drive (default 0).
+    #[serde(default)]
+    pub delay_samples: usize,
+    /// Saturation of the controller output `|u| <= saturation` [input units] (default none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub saturation: Option<f64>,
+    /// Column added to the command after the saturation [input units] (e.g. EMPS `pulses_N`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub added_input: Option<String>,
+}
+
+impl ControllerSpec {
+    /// Largest delay accepted [samples].
+    pub const MAX_DELAY: usize = 1000;
+    /// Plausible range of a gain.
+    pub const GAIN_RANGE: (f64, f64) = (0.0, 1e9);
+
+    /// Proportional gain `P` [input unit / position unit].
+    pub fn p_gain(&self) -> f64 {
+        match self.kv {
+            Some(kv) => kv * self.kp,
+            None => self.kp,
+        }
+    }
+
+    /// Derivative gain `D` [input unit / (position unit / s)].
+    pub fn d_gain(&self) -> f64 {
+        self.kv.or(self.kd).unwrap_or(0.0)
+    }
+
+    /// The controller output before the delay: saturated law plus the added input, at sample
+    /// `k` from reference `r`, positions `q(k), q(k-1), q(k-2)` and period `dt`; the velocity
+    /// is 0 at the first sample (`first`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn command(
+        &self,
+        r: f64,
+        q: f64,
+        q1: f64,
+        q2: f64,
+        dt: f64,
+        first: bool,
+        added: f64,
+    ) -> f64 {
+        let qdot = if first {
+            0.0
+        } else {
+            match self.velocity {
+                VelocityEstimate::BackwardDifference => (q - q1) / dt,
+                VelocityEstimate::AveragedDifference => {
+                    ((0.5 * q + 0.5 * q1) - (0.5 * q1 + 0.5 * q2)) / dt
+                }
+            }
+        };
+        let u = match self.kv {
+            Some(kv) => kv * (self.kp * (r - q) - qdot),
+            None => self.kp * (r - q) - self.kd.unwrap_or(0.0) * qdot,
+        };
+        let u = match self.saturation {
+            Some(s) => u.clamp(-s, s),
+            None => u,
+        };
+        u + added
+    }
+
+    fn check(&self) -> Result<(), (&'static str, String)> {
+        let (lo, hi) = Self::GAIN_RANGE;
+        let gain = |key: &'static str, v: f64| -> Result<(), (&'static str, String)> {
+            if v.is_finite() && (lo..=hi).contains(&v) {
+                Ok(())
+            } else {
+                Err((
+                    key,
+                    format!("controller.{key} must be in [{lo}, {hi}] (got {v})"),
+                ))
+            }
+        };
+        gain("kp", self.kp)?;
+        match (self.kv, self.kd) {
+            (Some(_), Some(_)) => {
+                return Err((
+                    "kd",
+                    "controller: give either `kv` (cascade form u = kv (kp (r - q) - qdot)) or \
+                     `kd` (parallel form u = kp (r - q) - kd qdot), not both"
+                        .into(),
+                ))
+            }
+            (None, None) => {
+                return Err((
+                    "kp",
+                    "controller: give `kv` (cascade form u = kv (kp (r - q) - qdot)) or `kd` \
+                     (parallel form u = kp (r - q) - kd qdot; kd = 0 for a P loop)"
+                        .into(),
+                ))
+            }
+            (Some(kv), None) => gain("kv", kv)?,
+            (None, Some(kd)) => gain("kd", kd)?,
+        }
+        if self.delay_samples > Self::MAX_DELAY {
+            return Err((
+                "delay_samples",
+                format!(
+                    "controller.delay_samples must be <= {} (got {})",
+                    Self::MAX_DELAY,
+                    self.delay_samples
+                ),
+            ));
+        }
+        if let Some(s) = self.saturation {
+            if !(s.is_finite() && s > 0.0 && s <= 1e9) {
+                return Err((
+                    "saturation",
+                    format!("controller.saturation must be in (0, 1e9] input units (got {s})"),
+                ));
+            }
+        }
+        if self.reference.trim().is_empty() {
+            return Err((
+                "reference",
+                "controller.reference must name a column".into(),
+            ));
+        }
+        if self
+            .added_input
+            .as_deref()
+            .is_some_and(|s| s.trim().is_empty())
+        {
+            return Err((
+                "added_input",
+                "controller.added_input must name a column".into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Contents of `dataset.toml`. Nothing is required; crane runs need a payload (here or per
+/// run).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DatasetSpec {
+    /// Free-text description.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+    /// Payload of every crane run unless the run says otherwise [kg] (not used by
+    /// single-axis runs).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub payload_kg: Option<f64>,
+    /// Unit of a single-axis position (default `m`).
+    #[serde(default, skip_serializing_if = "PositionUnit::is_metre")]
+    pub position_unit: PositionUnit,
+    /// Unit of a single-axis input `u` (default `V`; a `force` column is an effort).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub input_unit: Option<InputUnit>,
+    /// Gain [effort per input unit] of a single-axis input (TOML key `gain`, alias
+    /// `gain_n_per_v`); absent: unknown (input units downstream) unless the input is an
+    /// effort.
+    #[serde(
+        default,
+        rename = "gain",
+        alias = "gain_n_per_v",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub gain_n_per_v: Option<f64>,
+    /// Column renames for every run: canonical name -> name in the files.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub columns: BTreeMap<String, String>,
+    /// Known constants of the crane.
+    #[serde(default)]
+    pub constants: Constants,
+    /// Breakaway noise variances used by the friction regression.
+    #[serde(default)]
+    pub breakaway_noise_var: BreakawayNoise,
+    /// The position controller that produced closed-loop single-axis data.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub controller: Option<ControllerSpec>,
+    /// The runs; when absent every `*.csv` of the directory is a run of kind `other`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub runs: Vec<RunSpec>,
+}
+
+impl DatasetSpec {
+    /// The minimal crane description: one payload, defaults for everything else.
+    pub fn minimal(payload_kg: f64) -> Self {
+        DatasetSpec {
+            payload_kg: Some(payload_kg),
+            ..DatasetSpec::single_axis()
+        }
+    }
+
+    /// A single-axis description with every default (m, V, unknown gain, no controller).
+    pub fn single_axis() -> Self {
+        DatasetSpec {
+            description: None,
+            payload_kg: None,
+            position_unit: PositionUnit::Metre,
+            input_unit: None,
+            gain_n_per_v: None,
+            columns: BTreeMap::new(),
+            constants: Constants::default(),
+            breakaway_noise_var: BreakawayNoise::default(),
+            controller: None,
+            runs: Vec::new(),
+        }
+    }
+
+    /// The input unit of single-axis runs with a `u` column (default volt).
+    pub fn input_unit(&self) -> InputUnit {
+        self.input_unit.unwrap_or_default()
+    }
+
+    /// The gain of a run (its own, else the data set's), as a [`Gain`]: 1 and known when the
+    /// input is an effort.
+    pub fn gain(&self, run: Option<&RunSpec>) -> Gain {
+        if self.input_unit().is_effort() {
+            return Gain::Known(1.0);
+        }
+        match run.and_then(|r| r.gain_n_per_v).or(self.gain_n_per_v) {
+            Some(g) => Gain::Known(g),
+            None => Gain::Unknown,
+        }
+    }
+}
+
+/// Plausible ranges of the constants, `[min, max]`, and why.
+pub const PAYLOAD_RANGE_KG: (f64, f64) = (0.0, 1e4);
+/// Masses of the crane's parts [kg].
+pub const MASS_RANGE_KG: (f64, f64) = (1e-3, 1e4);
+/// Gravity: from the Moon (1.62) to Jupiter (24.8), rounded outwards [m/s^2].
+pub const GRAVITY_RANGE: (f64, f64) = (1.0, 25.0);
+/// Pulley and drum radii [m].
+pub const RADIUS_RANGE_M: (f64, f64) = (1e-4, 1.0);
+/// Encoder pulses per revolution.
+pub const ENCODER_RANGE: (f64, f64) = (1.0, 1e9);
+/// Bounds of the travel ranges [m]; a range must be at least 1 mm wide.
+pub const TRAVEL_RANGE_M: (f64, f64) = (-100.0, 100.0);
+/// Breakaway noise variances [N^2].
+pub const NOISE_VAR_RANGE: (f64, f64) = (1e-12, 1e6);
+
+/// 1-based line of the first line defining `key` (as `key =` or `key=`), if any.
+fn line_of_key(text: &str, key: &str) -> Option<usize> {
+    text.lines()
+        .position(|l| {
+            let l = l.trim_start();
+            l.strip_prefix(key)
+                .is_some_and(|rest| rest.trim_start().starts_with('='))
+        })
+        .map(|i| i + 1)
+}
+
+/// Parses `dataset.toml` text (a UTF-8 byte-order mark is skipped) and checks every number
+/// against its plausible range; errors name the file and the line of the key.
+pub fn parse_spec(file: &Path, text: &str) -> Result<DatasetSpec, DataError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let spec: DatasetSpec = toml::from_str(text).map_err(|e| {
+        let line = e
+            .span()
+            .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
+        err(file, line, None, Problem::Toml(clip_quoted(e.message())))
+    })?;
+    let bad = |key: &str, what: String| {
+        let last = key.rsplit('.').next().unwrap_or(key);
+        err(file, line_of_key(text, last), None, Problem::BadValue(what))
+    };
+    let within = |key: &str, v: f64, (lo, hi): (f64, f64), unit: &str| {
+        if v.is_finite() && v >= lo && v <= hi {
+            Ok(())
+        } else {
+            Err(bad(
+                key,
+                format!("{key} must be in [{lo}, {hi}] {unit} (got {v})"),
+            ))
+        }
+    };
+    if let Some(m) = spec.payload_kg {
+        within("payload_kg", m, PAYLOAD_RANGE_KG, "kg")?;
+    }
+    let gain_key = if text.contains("gain_n_per_v") {
+        "gain_n_per_v"
+    } else {
+        "gain"
+    };
+    if let Some(g) = spec.gain_n_per_v {
+        within(gain_key, g, Gain::RANGE, "(effort per input unit)")?;
+    }
+    let effort = spec.position_unit.effort_unit();
+    if let Some(u) = spec.input_unit {
+        if u.is_effort() && u != effort {
+            return Err(bad(
+                "input_unit",
+                format!(
+                    "input_unit `{}` does not go with position_unit `{}`: a {} axis is driven \
+                     in `{}`",
+                    u.symbol(),
+                    spec.position_unit.symbol(),
+                    if spec.position_unit.is_metre() {
+                        "linear"
+                    } else {
+                        "rotary"
+                    },
+                    effort.symbol()
+                ),
+            ));
+        }
+        if u.is_effort() && spec.gain_n_per_v.is_some_and(|g| g != 1.0) {
+            return Err(bad(
+                gain_key,
+                format!(
+                    "the input is already an effort (`{}`): its gain is 1; remove `{gain_key}`",
+                    u.symbol()
+                ),
+            ));
+        }
+    }
+    let c = &spec.constants;
+    within(
+        "constants.trolley_mass_kg",
+        c.trolley_mass_kg,
+        MASS_RANGE_KG,
+        "kg",
+    )?;
+    within(
+        "constants.rail_mass_kg",
+        c.rail_mass_kg,
+        (0.0, MASS_RANGE_KG.1),
+        "kg",
+    )?;
+    within("constants.gravity", c.gravity, GRAVITY_RANGE, "m/s^2")?;
+    for (key, v) in [
+        ("constants.pulley_radius_x_m", c.pulley_radius_x_m),
+        ("constants.pulley_radius_y_m", c.pulley_radius_y_m),
+        ("constants.pulley_radius_l_m", c.pulley_radius_l_m),
+    ] {
+        within(key, v, RADIUS_RANGE_M, "m")?;
+    }
+    within(
+        "constants.encoder_pulses",
+        c.encoder_pulses,
+        ENCODER_RANGE,
+        "pulses per revolution",
+    )?;
+    for (key, r, positive) in [
+        ("constants.x_range_m", c.x_range_m, false),
+        ("constants.y_range_m", c.y_range_m, false),
+        ("constants.l_range_m", c.l_range_m, true),
+    ] {
+        let (lo, hi) = TRAVEL_RANGE_M;
+        let ok = r.iter().all(|v| v.is_finite() && *v >= lo && *v <= hi)
+            && r[1] - r[0] >= 1e-3
+            && (!positive || r[0] > 0.0);
+        if !ok {
+            return Err(bad(
+                key,
+                format!(
+                    "{key} must be [min, max] within [{lo}, {hi}] m, at least 1 mm wide{} \
+                     (got [{}, {}])",
+                    if positive { ", min > 0" } else { "" },
+                    r[0],
+                    r[1]
+                ),
+            ));
+        }
+    }
+    let n = &spec.breakaway_noise_var;
+    for (key, v) in [
+        ("breakaway_noise_var.x_pos", n.x_pos),
+        ("breakaway_noise_var.x_neg", n.x_neg),
+        ("breakaway_noise_var.y_pos", n.y_pos),
+        ("breakaway_noise_var.y_neg", n.y_neg),
+    ] {
+        within(key, v, NOISE_VAR_RANGE, "N^2")?;
+    }
+    if let Some(ctl) = &spec.controller {
+        ctl.check().map_err(|(key, what)| {
+            let line = text
+                .find("[controller]")
+                .map(|at| text[..at].matches('\n').count())
+                .and_then(|skip| {
+                    line_of_key(&text.lines().skip(skip).collect::<Vec<_>>().join("\n"), key)
+                        .map(|l| l + skip)
+                });
+            err(file, line, None, Problem::BadValue(what))
+        })?;
+    }
+    for r in &spec.runs {
+        if let Some(m) = r.payload_kg {
+            within("payload_kg", m, PAYLOAD_RANGE_KG, "kg")?;
+        }
+        if let Some(g) = r.gain_n_per_v {
+            within(gain_key, g, Gain::RANGE, "(effort per input unit)")?;
+        }
+        if r.file.trim().is_empty() {
+            return Err(bad("file", "runs.file must name a CSV file".into()));
+        }
+    }
+    Ok(spec)
+}

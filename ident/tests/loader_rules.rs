@@ -1,0 +1,481 @@
+//! The loader's rules for real logs, one test per rule: units, gains, declared controllers,
+//! irregular time stamps, held channels, gaps, BOM, header hints, ranges and clipped errors.
+
+use crane_ident::data::{
+    load_dataset, parse_table, DataError, Dataset, Gain, InputUnit, LoadNote, PositionUnit,
+    Problem, RunKind, Timing,
+};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+static N: AtomicUsize = AtomicUsize::new(0);
+
+fn temp_dir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!(
+        "crane-ident-rules-{}-{}-{}",
+        std::process::id(),
+        tag,
+        N.fetch_add(1, Ordering::SeqCst)
+    ));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn set(toml: &str, csv: &str) -> PathBuf {
+    let d = temp_dir("set");
+    std::fs::write(d.join("dataset.toml"), toml).unwrap();
+    std::fs::write(d.join("run.csv"), csv).unwrap();
+    d
+}
+
+fn ok(toml: &str, csv: &str) -> Dataset {
+    load_dataset(&set(toml, csv)).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn fails(toml: &str, csv: &str) -> (PathBuf, DataError) {
+    let d = set(toml, csv);
+    let e = load_dataset(&d).expect_err("must be refused");
+    (d, e)
+}
+
+/// `n` rows of `t,x,u` at period `dt`, x a slow sine, u a ramp.
+fn axis_csv(n: usize, dt: f64) -> String {
+    let mut s = String::from("t,x,u\n");
+    for k in 0..n {
+        let t = k as f64 * dt;
+        let _ = writeln!(s, "{t},{},{}", 0.1 * (t * 2.0).sin(), 0.5 * t);
+    }
+    s
+}
+
+#[test]
+fn single_axis_needs_no_payload_and_works_in_input_units_without_a_gain() {
+    let ds = ok("", &axis_csv(50, 0.01));
+    let a = ds.runs[0].axis().unwrap();
+    assert_eq!(a.gain, Gain::Unknown);
+    assert_eq!(a.input_unit, InputUnit::Volt);
+    assert_eq!(a.position_unit, PositionUnit::Metre);
+    assert_eq!(a.force, a.u);
+    assert_eq!(a.effort_unit(), "V");
+    assert!(a.notes.is_empty());
+    assert_eq!(ds.runs[0].payload_kg, 0.0);
+}
+
+#[test]
+fn gain_key_and_its_alias_scale_the_input() {
+    for key in ["gain", "gain_n_per_v"] {
+        let ds = ok(&format!("{key} = 2.5\n"), &axis_csv(10, 0.01));
+        let a = ds.runs[0].axis().unwrap();
+        assert_eq!(a.gain, Gain::Known(2.5));
+        assert_eq!(a.effort_unit(), "N");
+        for (f, u) in a.force.iter().zip(&a.u) {
+            assert_eq!(*f, 2.5 * u);
+        }
+    }
+    // both at once is a duplicate
+    let (d, e) = fails("gain = 2\ngain_n_per_v = 2\n", &axis_csv(10, 0.01));
+    assert_eq!(e.location.file, d.join("dataset.toml"));
+    // per-run gain overrides the data set's
+    let ds = ok(
+        "gain = 2\n[[runs]]\nfile = \"run.csv\"\ngain = 3\n",
+        &axis_csv(10, 0.01),
+    );
+    assert_eq!(ds.runs[0].axis().unwrap().gain, Gain::Known(3.0));
+}
+
+#[test]
+fn rotary_torque_input_has_gain_one_and_nm_is_accepted() {
+    for unit in ["N m", "Nm"] {
+        let ds = ok(
+            &format!("position_unit = \"rad\"\ninput_unit = \"{unit}\"\n"),
+            &axis_csv(10, 0.01),
+        );
+        let a = ds.runs[0].axis().unwrap();
+        assert_eq!(a.input_unit, InputUnit::NewtonMetre);
+        assert_eq!(a.position_unit, PositionUnit::Radian);
+        assert_eq!(a.gain, Gain::Known(1.0));
+        assert_eq!(a.effort_unit(), "N m");
+    }
+    // a force on a rotary axis, or a gain on an effort, is a contradiction
+    let (_, e) = fails(
+        "position_unit = \"rad\"\ninput_unit = \"N\"\n",
+        &axis_csv(10, 0.01),
+    );
+    assert!(e.to_string().contains("rotary"), "{e}");
+    assert_eq!(e.location.line, Some(2), "{e}");
+    let (_, e) = fails("input_unit = \"N\"\ngain = 3\n", &axis_csv(10, 0.01));
+    assert!(e.to_string().contains("gain"), "{e}");
+    // other units keep their name and range
+    let ds = ok("input_unit = \"%\"\n", &axis_csv(10, 0.01));
+    assert_eq!(ds.runs[0].axis().unwrap().input_unit, InputUnit::Percent);
+    let (_, e) = fails("input_unit = \"%\"\n", "t,x,u\n0,0,50\n0.01,0,150\n");
+    assert!(matches!(e.problem, Problem::OutOfRange { .. }), "{e}");
+    assert_eq!(e.location.line, Some(3));
+}
+
+#[test]
+fn unknown_units_are_refused_with_the_known_ones() {
+    let (d, e) = fails("input_unit = \"furlongs\"\n", &axis_csv(10, 0.01));
+    assert_eq!(e.location.file, d.join("dataset.toml"));
+    assert_eq!(e.location.line, Some(1));
+    let msg = e.to_string();
+    for u in ["`V`", "`N m`", "`A`", "`PWM`", "`%`"] {
+        assert!(msg.contains(u), "{msg}");
+    }
+    let (_, e) = fails("position_unit = \"deg\"\n", &axis_csv(10, 0.01));
+    assert!(e.to_string().contains("`rad`"), "{e}");
+}
+
+#[test]
+fn crane_runs_still_need_a_payload() {
+    let crane =
+        "t,u_x,u_y,u_l,x,y,l,alpha,beta\n0,0,0,0,0.1,0.1,0.3,1.5,0\n0.01,0,0,0,0.1,0.1,0.3,1.5,0\n";
+    let (d, e) = fails("", crane);
+    assert_eq!(e.location.file, d.join("run.csv"));
+    assert!(e.to_string().contains("payload_kg"), "{e}");
+    assert_eq!(ok("payload_kg = 0.2\n", crane).runs[0].payload_kg, 0.2);
+}
+
+#[test]
+fn irregular_stamps_are_resampled_by_zero_order_hold_and_said() {
+    // 10 ms nominal with +-30 % jitter on every other row
+    let mut s = String::from("t,x,u\n");
+    let mut rows = Vec::new();
+    for k in 0..200 {
+        let t = k as f64 * 0.01 + if k % 2 == 1 { 0.003 } else { 0.0 };
+        rows.push((t, k as f64 * 1e-3, k as f64));
+        let _ = writeln!(s, "{t},{},{}", k as f64 * 1e-3, k as f64);
+    }
+    let ds = ok("", &s);
+    let a = ds.runs[0].axis().unwrap();
+    assert!(a.resampled());
+    match &a.notes[0] {
+        LoadNote::Resampled {
+            rows_in,
+            rows_out,
+            step_s,
+            why,
+        } => {
+            assert_eq!(*rows_in, 200);
+            // the grid step is the mean of the ordinary steps (7 and 13 ms here), not the
+            // median (13 ms) and not the file's span over its rows
+            assert!((step_s - 0.01).abs() < 1e-4, "{step_s}");
+            assert_eq!(*rows_out, a.t.len());
+            assert!(why.irregular_steps > 90, "{why:?}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // uniform grid, never the mean step of the file, values held from the last row at or
+    // before each instant
+    let h = a.t[1] - a.t[0];
+    for (k, w) in a.t.windows(2).enumerate() {
+        assert!((w[1] - w[0] - h).abs() < 1e-9, "{k}");
+    }
+    for (k, &g) in a.t.iter().enumerate() {
+        let last = rows.iter().rev().find(|r| r.0 <= g + 1e-12).unwrap();
+        assert_eq!(a.x[k], last.1, "{k}");
+        assert_eq!(a.u[k], last.2, "{k}");
+    }
+    assert!(a.notes[0].to_string().contains("zero-order hold"));
+}
+
+#[test]
+fn gaps_and_backward_time_are_refused_at_their_line() {
+    // rows lost: a gap of 50 steps
+    let mut s = String::from("t,x,u\n");
+    for k in (0..100).chain(150..200) {
+        let _ = writeln!(s, "{},{},0", k as f64 * 0.01, k as f64 * 1e-3);
+    }
+    let (d, e) = fails("", &s);
+    assert_eq!(e.location.file, d.join("run.csv"));
+    assert_eq!(e.location.line, Some(102), "{e}");
+    assert!(
+        matches!(e.problem, Problem::Timing(Timing::Gap { .. })),
+        "{e}"
+    );
+    assert!(e.to_string().contains("rows missing"), "{e}");
+    let (_, e) = fails("", "t,x,u\n0,0,0\n0.01,0,0\n0.005,0,0\n");
+    assert_eq!(e.location.line, Some(4));
+    assert!(matches!(e.problem, Problem::TimeNotIncreasing { .. }));
+}
+
+#[test]
+fn crane_run_with_rows_dropped_midway_is_refused() {
+    // issue 11: half the rows dropped in the second half was accepted
+    let mut s = String::from("t,u_x,u_y,u_l,x,y,l,alpha,beta\n");
+    for k in (0..100).chain((100..200).step_by(2)) {
+        let _ = writeln!(s, "{},0,0,0,0.1,0.1,0.3,1.5,0", k as f64 * 0.002);
+    }
+    let (d, e) = fails("payload_kg = 0.1\n", &s);
+    assert_eq!(e.location.file, d.join("run.csv"));
+    assert_eq!(e.location.column, Some(("t".to_string(), 1)));
+    assert!(
+        matches!(e.problem, Problem::Timing(Timing::IrregularCrane { .. })),
+        "{e}"
+    );
+    assert!(e.to_string().contains("uniformly sampled"), "{e}");
+    assert!(e.location.line.is_some_and(|l| l >= 102), "{e}");
+}
+
+#[test]
+fn held_channels_are_noted() {
+    // the position refreshed every 4 rows of a 100 Hz log
+    let mut s = String::from("t,x,u\n");
+    for k in 0..400 {
+        let fresh = (k - k % 4) as f64;
+        let _ = writeln!(
+            s,
+            "{},{},{}",
+            k as f64 * 0.01,
+            0.2 * (fresh * 0.03).sin(),
+            k
+        );
+    }
+    let ds = ok("", &s);
+    let a = ds.runs[0].axis().unwrap();
+    assert_eq!(a.refresh_rows(), 4);
+    assert!(!a.resampled());
+    match &a.notes[..] {
+        [LoadNote::HeldChannel {
+            column,
+            rows_per_refresh,
+            repeated_share,
+        }] => {
+            assert_eq!(column, "x");
+            assert_eq!(*rows_per_refresh, 4);
+            assert!((repeated_share - 0.75).abs() < 0.01);
+        }
+        other => panic!("{other:?}"),
+    }
+    // the same signal refreshed every row is not
+    let ds = ok("", &axis_csv(400, 0.01));
+    assert_eq!(ds.runs[0].axis().unwrap().refresh_rows(), 1);
+}
+
+#[test]
+fn bom_crlf_and_header_units() {
+    let d = set(
+        "\u{feff}gain = 2\r\n",
+        "\u{feff}t,x,u\r\n0,0,1\r\n0.01,0,2\r\n",
+    );
+    let ds = load_dataset(&d).unwrap();
+    assert_eq!(ds.runs[0].axis().unwrap().force, vec![2.0, 4.0]);
+    let (_, e) = fails("", "t [s],x,u\n0,0,0\n0.01,0,0\n");
+    let msg = e.to_string();
+    assert!(msg.contains("`t [s]`") && msg.contains("unit"), "{msg}");
+    assert!(msg.contains("the header has `t [s]`, `x`, `u`"), "{msg}");
+}
+
+#[test]
+fn unknown_key_is_reported_on_its_own_line() {
+    let (d, e) = fails("gain = 2\n\nbogus = 1\n", &axis_csv(10, 0.01));
+    assert_eq!(e.location.file, d.join("dataset.toml"));
+    assert_eq!(e.location.line, Some(3), "{e}");
+    let (_, e) = fails(
+        "[[runs]]\nfile = \"run.csv\"\nkind = \"validation\"\nbogus = 1\n",
+        &axis_csv(10, 0.01),
+    );
+    assert_eq!(e.location.line, Some(4), "{e}");
+}
+
+#[test]
+fn long_fields_are_clipped_in_messages() {
+    let huge = "9".repeat(100) + "x" + &"y".repeat(10_000);
+    let (_, e) = fails("", &format!("t,x,u\n0,0,0\n0.01,{huge},0\n"));
+    let msg = e.to_string();
+    assert!(msg.len() < 300, "{} chars", msg.len());
+    assert!(msg.contains("10101 characters"), "{msg}");
+    let long_name = "n".repeat(5000);
+    let (_, e) = fails("", &format!("{long_name},x,u\n0,0,0\n0.01,0,0\n"));
+    assert!(e.to_string().len() < 600, "{}", e.to_string().len());
+    let (_, e) = fails(&format!("input_unit = \"{}\"\n", "V".repeat(5000)), "t\n");
+    assert!(e.to_string().len() < 1000, "{}", e.to_string().len());
+}
+
+#[test]
+fn gain_times_input_cannot_overflow() {
+    // issue 11: `gain * u` overflowing to infinity was accepted; the gain's and the input's
+    // ranges now bound the product (1e9 * 1e9 counts), and a gain beyond is refused
+    let ds = ok(
+        "gain = 1e9\ninput_unit = \"counts\"\n",
+        "t,x,u\n0,0,0\n0.01,0,-1e9\n",
+    );
+    assert_eq!(ds.runs[0].axis().unwrap().force, vec![0.0, -1e18]);
+    let (d, e) = fails(
+        "input_unit = \"counts\"\ngain = 1e300\n",
+        "t,x,u\n0,0,0\n0.01,0,1e300\n",
+    );
+    assert_eq!(e.location.file, d.join("dataset.toml"));
+    assert_eq!(e.location.line, Some(2));
+    let (d, e) = fails("input_unit = \"counts\"\n", "t,x,u\n0,0,0\n0.01,0,1e300\n");
+    assert_eq!(e.location.file, d.join("run.csv"));
+    assert!(matches!(e.problem, Problem::OutOfRange { .. }), "{e}");
+}
+
+#[test]
+fn constants_have_plausible_ranges() {
+    for (toml, key) in [
+        ("[constants]\ngravity = 1e308\n", "constants.gravity"),
+        (
+            "[constants]\nencoder_pulses = 1e-300\n",
+            "constants.encoder_pulses",
+        ),
+        (
+            "[constants]\nx_range_m = [0, 1e-300]\n",
+            "constants.x_range_m",
+        ),
+        (
+            "[constants]\nx_range_m = [-1e308, 1e308]\n",
+            "constants.x_range_m",
+        ),
+        ("[constants]\nl_range_m = [0, 0.5]\n", "constants.l_range_m"),
+        (
+            "[constants]\ntrolley_mass_kg = 1e9\n",
+            "constants.trolley_mass_kg",
+        ),
+        (
+            "[constants]\npulley_radius_x_m = 1e-9\n",
+            "constants.pulley_radius_x_m",
+        ),
+        ("payload_kg = 1e300\n", "payload_kg"),
+        ("gain = 1e300\n", "gain"),
+        (
+            "[breakaway_noise_var]\nx_pos = 0\n",
+            "breakaway_noise_var.x_pos",
+        ),
+    ] {
+        let (d, e) = fails(toml, &axis_csv(10, 0.01));
+        assert_eq!(e.location.file, d.join("dataset.toml"));
+        assert!(e.to_string().contains(key), "{toml}: {e}");
+        assert_eq!(e.location.line, Some(toml.lines().count()), "{toml}: {e}");
+    }
+}
+
+const EMPS_LIKE: &str =
+    "t,qm,qg,vir,pulses_N\n0,0,0,0,0\n0.001,0,0.001,0.1,5\n0.002,0.0001,0.002,0.2,0\n";
+
+#[test]
+fn declared_controller_gives_the_loop_signals() {
+    let toml = "gain = 35\n[columns]\nx = \"qm\"\nu = \"vir\"\n[controller]\nreference = \"qg\"\nkp = 160.18\nkv = 243.45\nvelocity = \"averaged_difference\"\ndelay_samples = 1\nsaturation = 10.0\nadded_input = \"pulses_N\"\n";
+    let ds = ok(toml, EMPS_LIKE);
+    let a = ds.runs[0].axis().unwrap();
+    let cl = a.closed_loop.as_ref().unwrap();
+    assert_eq!(cl.reference, vec![0.0, 0.001, 0.002]);
+    assert_eq!(cl.added_input, vec![0.0, 5.0, 0.0]);
+    let spec = ds.spec.controller.as_ref().unwrap();
+    assert!((spec.p_gain() - 160.18 * 243.45).abs() < 1e-9);
+    assert_eq!(spec.d_gain(), 243.45);
+    let ctl = crane_ident::emps::Controller::from_declared(spec, a.gain).unwrap();
+    assert_eq!(ctl.gtau, 35.0);
+    assert_eq!(ctl.delay_samples, 1);
+    // saturation, then the added input
+    assert_eq!(spec.command(1.0, 0.0, 0.0, 0.0, 0.001, true, 5.0), 15.0);
+    // parallel form, P loop
+    let ds = ok(
+        "[columns]\nx = \"qm\"\nu = \"vir\"\n[controller]\nreference = \"qg\"\nkp = 3\nkd = 0\n",
+        EMPS_LIKE,
+    );
+    let spec = ds.spec.controller.as_ref().unwrap();
+    assert_eq!(spec.command(1.0, 0.5, 0.0, 0.0, 0.001, false, 0.0), 1.5);
+    assert!(crane_ident::emps::Controller::from_declared(spec, Gain::Unknown).is_err());
+}
+
+#[test]
+fn controller_declaration_errors() {
+    let base = "[columns]\nx = \"qm\"\nu = \"vir\"\n[controller]\nreference = \"qg\"\n";
+    for (extra, needle, line) in [
+        ("kp = 1\nkv = 1\nkd = 1\n", "not both", Some(8)),
+        ("kp = 1\n", "give `kv`", Some(6)),
+        ("kp = -1\nkv = 1\n", "controller.kp", Some(6)),
+        ("kp = 1\nkv = nan\n", "controller.kv", Some(7)),
+        (
+            "kp = 1\nkv = 1\nsaturation = 0\n",
+            "controller.saturation",
+            Some(8),
+        ),
+        (
+            "kp = 1\nkv = 1\ndelay_samples = 100000\n",
+            "delay_samples",
+            Some(8),
+        ),
+        (
+            "kp = 1\nkv = 1\nvelocity = \"psychic\"\n",
+            "averaged_difference",
+            Some(8),
+        ),
+        ("kp = 1\nkv = 1\nintegral = 3\n", "unknown field", Some(8)),
+    ] {
+        let (d, e) = fails(&format!("{base}{extra}"), EMPS_LIKE);
+        assert_eq!(e.location.file, d.join("dataset.toml"), "{extra}");
+        assert!(e.to_string().contains(needle), "{extra}: {e}");
+        assert_eq!(e.location.line, line, "{extra}: {e}");
+    }
+    // a reference column the run does not have
+    let (d, e) = fails(
+        "[columns]\nx = \"qm\"\nu = \"vir\"\n[controller]\nreference = \"r\"\nkp = 1\nkv = 1\n",
+        EMPS_LIKE,
+    );
+    assert_eq!(e.location.file, d.join("run.csv"));
+    assert!(e.to_string().contains("missing column `r`"), "{e}");
+}
+
+#[test]
+fn duplicate_columns_in_a_huge_header_are_found() {
+    // 200k columns: linear check (was quadratic, 81 s)
+    let mut h: Vec<String> = (0..200_000).map(|k| format!("c{k}")).collect();
+    h.push("c17".into());
+    let text = format!("{}\n", h.join(","));
+    let e = parse_table(Path::new("wide.csv"), &text).unwrap_err();
+    assert!(matches!(e.problem, Problem::DuplicateColumn));
+    assert_eq!(e.location.column, Some(("c17".to_string(), 200_001)));
+}
+
+#[test]
+fn validation_kind_is_held_out() {
+    let ds = ok(
+        "[[runs]]\nfile = \"run.csv\"\nkind = \"validation\"\nnote = \"held out\"\n",
+        &axis_csv(10, 0.01),
+    );
+    assert_eq!(ds.runs[0].kind, RunKind::Validation);
+    assert_eq!(ds.spec.runs[0].note.as_deref(), Some("held out"));
+}
+
+#[test]
+fn asynchronous_two_topic_log_is_resampled_and_its_slow_channel_noted() {
+    // a ROS-like log: rows at the union of a 100 Hz position topic and a 33 Hz input topic
+    // (offset 3 ms), each column holding its last message
+    let mut stamps: Vec<(f64, bool)> = (0..300).map(|k| (k as f64 * 0.01, true)).collect();
+    stamps.extend((0..100).map(|k| (k as f64 * 0.03 + 0.003, false)));
+    stamps.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (mut x, mut u) = (0.0, 0.0);
+    let mut s = String::from("t,x,u\n");
+    for (t, is_x) in &stamps {
+        if *is_x {
+            x = 0.1 * (t * 3.0).sin();
+        } else {
+            u = 2.0 * (t * 1.7).cos() + t;
+        }
+        let _ = writeln!(s, "{t},{x},{u}");
+    }
+    let ds = ok("", &s);
+    let a = ds.runs[0].axis().unwrap();
+    assert!(a.resampled(), "{:?}", a.notes);
+    let LoadNote::Resampled { rows_in, .. } = &a.notes[0] else {
+        panic!("{:?}", a.notes)
+    };
+    assert_eq!(*rows_in, 400);
+    // the grid is uniform and covers the log
+    let h = a.t[1] - a.t[0];
+    assert!(a.t.windows(2).all(|w| (w[1] - w[0] - h).abs() < 1e-9));
+    assert!((a.t[a.t.len() - 1] - 2.99).abs() <= h);
+    // the 33 Hz input repeats on the grid: noted as held
+    assert!(
+        a.notes
+            .iter()
+            .any(|n| matches!(n, LoadNote::HeldChannel { column, .. } if column == "u")),
+        "{:?}",
+        a.notes
+    );
+}
