@@ -232,7 +232,7 @@ fn same_error(m: &StepError, r: &RefError) -> bool {
             | (StepError::Singular, RefError::Singular)
             | (StepError::NonFinite, RefError::NonFiniteState)
             | (StepError::OutOfDomain, RefError::OutOfDomain)
-    )
+    ) || matches!((m, r), (StepError::OutOfLimits { axis }, RefError::OutOfLimits(i)) if axis == i)
 }
 
 /// What one case exercised.
@@ -349,7 +349,8 @@ fn run_case(case: &Case, law: FrictionLaw, steps: usize) -> Result<Stats, TestCa
                 match a {
                     StepError::Singular => st.rejected[0] += 1,
                     StepError::NonFinite => st.rejected[1] += 1,
-                    StepError::OutOfDomain => st.rejected[2] += 1,
+                    // outside the swing domain or the limits
+                    StepError::OutOfDomain | StepError::OutOfLimits { .. } => st.rejected[2] += 1,
                     StepError::InputNotFinite { .. } => {}
                 }
                 last_rejected = true;

@@ -488,7 +488,10 @@ fn million_random_steps() -> MillionRun {
                     match e {
                         StepError::Singular => run.rejected[0] += 1,
                         StepError::NonFinite => run.rejected[1] += 1,
-                        StepError::OutOfDomain => run.rejected[2] += 1,
+                        // outside the swing domain or the limits
+                        StepError::OutOfDomain | StepError::OutOfLimits { .. } => {
+                            run.rejected[2] += 1
+                        }
                         StepError::InputNotFinite { .. } => panic!("step {k}: {e}"),
                     }
                     run.first.get_or_insert((k, e));
