@@ -15,6 +15,7 @@
 //! - [`identify`]: the paper's estimation pipeline; [`identify::identify`].
 //! - [`validate`]: NMAE of the payload position on validation runs; [`validate::validate`].
 //! - [`params_file`]: the model parameters as TOML.
+//! - [`atomic`]: atomic file writes (temporary file + rename), used for every output.
 //!
 //! Entry points for the command line:
 //! ```no_run
@@ -36,6 +37,7 @@
 // Units are written in brackets, `[m]`, `[N s/m]`: they are not intra-doc links.
 #![allow(rustdoc::broken_intra_doc_links)]
 
+pub mod atomic;
 pub mod blr;
 pub mod campaign;
 pub mod data;

@@ -126,8 +126,8 @@ impl ParamsFile {
         Ok(p)
     }
 
-    /// Writes a parameter file.
+    /// Writes a parameter file (atomically: temporary file + rename).
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
-        std::fs::write(path, self.to_toml())
+        crate::atomic::write(path, self.to_toml())
     }
 }

@@ -15,6 +15,8 @@
 //!   stable RK4 step, the hybrid step at equal accuracy) and the paper's table.
 //! - [`figures`]: the paper's two figures (SVG).
 //! - [`montecarlo`]: many independent simulations over friction uncertainty on all cores.
+//! - [`output`]: where the command line writes: atomic writes that never replace an input or
+//!   a data set unless forced.
 
 #![forbid(unsafe_code)]
 
@@ -22,6 +24,7 @@ pub mod cases;
 pub mod figures;
 pub mod montecarlo;
 pub mod ode45;
+pub mod output;
 pub mod reference;
 pub mod smooth;
 pub mod study;
