@@ -39,6 +39,9 @@ fn opts(baseline: Baseline) -> DiagnoseOptions {
 
 #[test]
 fn emps_symmetric_model_misses_the_direction_dependence() {
+    if crane_ident::shared_data::require("emps").is_none() {
+        return;
+    }
     let r = diagnose_dataset(&emps(), &opts(Baseline::Symmetric)).unwrap();
     eprintln!("{}", r.to_json());
     let m = &r.measures;
@@ -80,6 +83,9 @@ fn emps_symmetric_model_misses_the_direction_dependence() {
 
 #[test]
 fn emps_paper_structure_then_finds_the_one_sample_command_delay() {
+    if crane_ident::shared_data::require("emps").is_none() {
+        return;
+    }
     let r = diagnose_dataset(&emps(), &opts(Baseline::Auto)).unwrap();
     eprintln!("{}", r.to_json());
     let m = &r.measures;
@@ -101,6 +107,9 @@ fn emps_paper_structure_then_finds_the_one_sample_command_delay() {
 
 #[test]
 fn emps_closed_loop_plots_are_written() {
+    if crane_ident::shared_data::require("emps").is_none() {
+        return;
+    }
     let dir = std::env::temp_dir().join(format!("crane-diagnose-emps-{}", std::process::id()));
     let o = DiagnoseOptions {
         baseline: Baseline::Symmetric,

@@ -1,6 +1,6 @@
 //! Independent reference implementation of the hybrid crane model (f64, `std`).
 //!
-//! Written directly from `shared/MODEL.md` (equations, conventions) and `model/NUMERICS.md`
+//! Written directly from `docs/MODEL.md` (equations, conventions) and `model/NUMERICS.md`
 //! (the floating-point contract, including the end-stop impulse, the swing domain and the
 //! "Extensions" section). It is meant to be read as the specification: plain functions on
 //! plain arrays, one expression per line of the contract, in the contract's operation order,
@@ -125,7 +125,7 @@ pub struct RefParams {
 }
 
 impl RefParams {
-    /// The INTECO 3D-Crane defaults, typed in again from the tables of `shared/MODEL.md`
+    /// The INTECO 3D-Crane defaults, typed in again from the tables of `docs/MODEL.md`
     /// (independently of `crane_model::Params::default()`, so the two can be compared).
     pub fn model_md_defaults() -> Self {
         RefParams {

@@ -30,7 +30,7 @@ fn axis_factors() -> impl Strategy<Value = (f64, f64, f64, f64, [f64; 5], [f64; 
     )
 }
 
-/// Random valid parameters: the MODEL.md defaults, perturbed.
+/// Random valid parameters: the docs/MODEL.md defaults, perturbed.
 fn params_strategy() -> impl Strategy<Value = Params> {
     (
         0.05f64..0.6,

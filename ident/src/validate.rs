@@ -4,7 +4,6 @@
 //! physical range of that axis (X travel, Y travel, rope length range).
 
 use crate::data::{CraneRun, Dataset, RunKind};
-use crate::params_file::ParamsFile;
 use crane_model::{Config, Crane, FrictionLaw, Params, State};
 use serde::{Deserialize, Serialize};
 
@@ -157,10 +156,7 @@ pub fn nmae(run: &CraneRun, sim: &[[f64; 5]], ranges: [f64; 3]) -> [f64; 3] {
 
 /// Validates `params` on every `validation` run of a data set (payload from each run; an
 /// unloaded run simulates a 1 g hook).
-pub fn validate_dataset(
-    params: &ParamsFile,
-    ds: &Dataset,
-) -> Result<ValidationReport, ValidateError> {
+pub fn validate_dataset(params: &Params, ds: &Dataset) -> Result<ValidationReport, ValidateError> {
     let c = &ds.spec.constants;
     let ranges = [
         c.x_range_m[1] - c.x_range_m[0],
@@ -170,7 +166,7 @@ pub fn validate_dataset(
     let mut runs = Vec::new();
     for run in ds.of_kind(RunKind::Validation) {
         let Some(cr) = run.crane() else { continue };
-        let mut p = Params::from(params);
+        let mut p = *params;
         p.payload_mass = if run.payload_kg > 0.0 {
             run.payload_kg
         } else {
@@ -200,7 +196,7 @@ pub fn validate_dataset(
 
 /// Loads a data set directory and validates `params` on it.
 pub fn validate(
-    params: &ParamsFile,
+    params: &Params,
     dataset_dir: &std::path::Path,
 ) -> Result<ValidationReport, ValidateError> {
     let ds = crate::data::load_dataset(dataset_dir)?;

@@ -2,7 +2,6 @@
 //! field or step error (issue 11: "mass matrix not positive definite" named no run).
 
 use crane_ident::data::{CraneRun, Dataset, DatasetSpec, Run, RunKind, Samples};
-use crane_ident::params_file::ParamsFile;
 use crane_ident::validate::{validate_dataset, SimError, ValidateError};
 use crane_model::Params;
 
@@ -44,7 +43,7 @@ fn rejected_step_names_run_sample_and_time() {
     p.y.inertia = 0.0;
     p.trolley_mass = 0.0167;
     let ds = dataset("007_validation_stiff.csv", shaking_run(3000, 0.3), 0.00066);
-    let err = validate_dataset(&ParamsFile::from(&p), &ds).expect_err("stiff run fails");
+    let err = validate_dataset(&p, &ds).expect_err("stiff run fails");
     let msg = err.to_string();
     assert!(
         matches!(&err, ValidateError::Run { run, source: SimError::Step { .. }, .. } if run == "007_validation_stiff.csv"),
@@ -63,8 +62,7 @@ fn rejected_step_names_run_sample_and_time() {
 #[test]
 fn bad_first_configuration_names_run_and_field() {
     let ds = dataset("008_validation.csv", shaking_run(10, 0.9), 0.064);
-    let err = validate_dataset(&ParamsFile::from(&Params::default()), &ds)
-        .expect_err("y0 beyond the rail");
+    let err = validate_dataset(&Params::default(), &ds).expect_err("y0 beyond the rail");
     let msg = err.to_string();
     assert!(
         msg.contains("008_validation.csv") && msg.contains("state.q[1]"),

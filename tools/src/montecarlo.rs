@@ -120,10 +120,26 @@ pub fn simulate(seed: u64, index: u64, duration: f64, h: f64) -> Result<Outcome>
 
 /// `sims` simulations in parallel on the current rayon pool.
 pub fn run(sims: usize, duration: f64, h: f64, seed: u64) -> Result<(Summary, Vec<Outcome>)> {
+    run_with_progress(sims, duration, h, seed, || {})
+}
+
+/// [`run`], calling `done` after each finished simulation (from the worker threads; e.g. a
+/// progress bar's `inc(1)`). The results do not depend on `done`.
+pub fn run_with_progress(
+    sims: usize,
+    duration: f64,
+    h: f64,
+    seed: u64,
+    done: impl Fn() + Sync,
+) -> Result<(Summary, Vec<Outcome>)> {
     let t0 = Instant::now();
     let out: Result<Vec<Outcome>> = (0..sims as u64)
         .into_par_iter()
-        .map(|i| simulate(seed, i, duration, h))
+        .map(|i| {
+            let r = simulate(seed, i, duration, h);
+            done();
+            r
+        })
         .collect();
     let out = out?;
     let wall_s = t0.elapsed().as_secs_f64();

@@ -32,7 +32,7 @@
 
 use anyhow::{bail, Context, Result};
 use crane_ident::atomic::AtomicFile;
-use crane_ident::params_file::ParamsFile;
+use crane_ident::params_file;
 use crane_model::{Config, Crane, FrictionLaw, Mode, Params, State};
 use crane_tools::output::{create_parent, OutputError, Outputs};
 use serde::{Deserialize, Serialize};
@@ -77,7 +77,7 @@ struct Scenario {
 }
 
 impl Default for Scenario {
-    /// The validation multisine of MODEL.md (amplitudes chosen to move every axis).
+    /// The validation multisine of docs/MODEL.md (amplitudes chosen to move every axis).
     fn default() -> Self {
         let sines = |axis: &str, f: [f64; 4], a: f64| -> Vec<Term> {
             f.iter()
@@ -225,11 +225,7 @@ pub fn simulate(
     let mut params = match &sc.params {
         Some(p) => {
             let path = base.join(p);
-            Params::from(
-                &ParamsFile::read(&path)
-                    .map_err(anyhow::Error::msg)
-                    .context("scenario: params")?,
-            )
+            params_file::read(&path).context("scenario: params")?
         }
         None => Params::default(),
     };

@@ -5,7 +5,7 @@ use crane_diagnose::{Baseline, DiagnoseOptions};
 use crane_ident::campaign::TRUTH_FILE;
 use crane_ident::campaign::{run_rig, RigOptions, RigSummary};
 use crane_ident::identify::{Estimate, Identified};
-use crane_ident::params_file::ParamsFile;
+use crane_ident::params_file;
 use crane_ident::validate::ValidationReport;
 use crane_tools::output::{create_parent, is_dataset, OutputError, Outputs};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -121,8 +121,7 @@ fn rig_truth(dataset: &Path) -> Result<Option<crane_model::Params>> {
     if !path.exists() {
         return Ok(None);
     }
-    let p = ParamsFile::read(&path).map_err(anyhow::Error::msg)?;
-    Ok(Some(crane_model::Params::from(&p)))
+    Ok(Some(params_file::read(&path)?))
 }
 
 /// `crane identify`: every parameter from a data set, written to `out` (TOML); friction
@@ -143,7 +142,7 @@ pub fn identify(
     let id = crane_ident::identify::identify(dataset)
         .with_context(|| format!("identify from {}", dataset.display()))?;
     pb.finish_and_clear();
-    outputs.write(out, id.params.to_toml())?;
+    outputs.write(out, params_file::to_toml(&id.params))?;
     let truth = rig_truth(dataset)?;
     let files = crate::plot::friction(&id, truth.as_ref(), plots, &outputs)?;
     if json {
@@ -204,9 +203,7 @@ pub fn validate(
     json: bool,
 ) -> Result<ValidationReport> {
     let outputs = Outputs::new(force).input(params);
-    let p = ParamsFile::read(params)
-        .map_err(anyhow::Error::msg)
-        .context("read parameters")?;
+    let p = params_file::read(params).context("read parameters")?;
     let ds = crane_ident::data::load_dataset(dataset)
         .with_context(|| format!("load data set {}", dataset.display()))?;
     let report = crane_ident::validate::validate_dataset(&p, &ds)
@@ -243,11 +240,7 @@ pub fn diagnose(
         outputs.check(r)?;
     }
     let file = match params {
-        Some(p) => Some(
-            ParamsFile::read(p)
-                .map_err(anyhow::Error::msg)
-                .context("read parameters")?,
-        ),
+        Some(p) => Some(params_file::read(p).context("read parameters")?),
         None => None,
     };
     let baseline = match (fit_baseline, file) {

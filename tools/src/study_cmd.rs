@@ -53,7 +53,17 @@ pub fn mc(sims: u64, duration: f64, h: f64, seed: u64, json: bool) -> Result<mon
         bail!("--duration {duration} is shorter than one step --h {h}");
     }
     let sims = usize::try_from(sims)?;
-    let (s, _) = montecarlo::run(sims, duration, h, seed)?;
+    // progress on stderr; indicatif draws nothing when stderr is not a terminal
+    let pb = indicatif::ProgressBar::new(sims as u64);
+    pb.set_style(
+        indicatif::ProgressStyle::with_template(
+            "mc {bar:40} {pos}/{len} simulations {elapsed} (eta {eta})",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let result = montecarlo::run_with_progress(sims, duration, h, seed, || pb.inc(1));
+    pb.finish_and_clear();
+    let (s, _) = result?;
     if !json {
         out!(
             "{} simulations of {} s (h = {} s) on {} threads: {:.3} s wall, {:.1} simulations/s, {:.3e} steps/s",
