@@ -426,7 +426,7 @@ pub fn run_campaign(
 
 /// Everything `crane rig` needs: the plant's true parameters, how the rig measures, and
 /// the campaign.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct RigOptions {
     /// The plant's true parameters (default: the paper's table; the payload is set per run).
@@ -437,17 +437,6 @@ pub struct RigOptions {
     pub campaign: Campaign,
     /// Known constants written into the data set (default: `docs/MODEL.md`).
     pub constants: Constants,
-}
-
-impl Default for RigOptions {
-    fn default() -> Self {
-        RigOptions {
-            truth: crane_model::Params::default(),
-            plant: crate::rig::PlantConfig::default(),
-            campaign: Campaign::default(),
-            constants: Constants::default(),
-        }
-    }
 }
 
 /// What `run_rig` did.
