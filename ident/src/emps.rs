@@ -242,21 +242,54 @@ pub struct ClosedLoopRun {
     pub pulses_v: Vec<f64>,
 }
 
+/// Why an EMPS closed-loop run did not load.
+#[derive(Debug, thiserror::Error)]
+pub enum EmpsError {
+    /// The CSV did not parse (file, line and column named).
+    #[error(transparent)]
+    Data(#[from] crate::data::DataError),
+    /// A column is missing.
+    #[error("{}: no column `{column}` (found: {found})", path.display())]
+    MissingColumn {
+        /// The file.
+        path: std::path::PathBuf,
+        /// The missing column.
+        column: &'static str,
+        /// The header names found, comma-separated.
+        found: String,
+    },
+    /// Too few samples for the closed loop.
+    #[error("{}: {samples} samples; at least 3 needed", path.display())]
+    TooShort {
+        /// The file.
+        path: std::path::PathBuf,
+        /// Samples found.
+        samples: usize,
+    },
+}
+
 /// Loads an EMPS CSV (`t, qm, qg, vir` and optionally `pulses_N`); the error names the file and
 /// the missing column or bad line.
-pub fn load_closed_loop(path: &std::path::Path) -> Result<ClosedLoopRun, String> {
-    let table = crate::data::read_table(path).map_err(|e| e.to_string())?;
-    let col = |name: &str| -> Result<Vec<f64>, String> {
+pub fn load_closed_loop(path: &std::path::Path) -> Result<ClosedLoopRun, EmpsError> {
+    let table = crate::data::read_table(path)?;
+    let col = |name: &'static str| -> Result<Vec<f64>, EmpsError> {
         table
             .header
             .iter()
             .position(|h| h == name)
             .map(|i| table.columns[i].clone())
-            .ok_or_else(|| format!("{}: no column `{name}`", path.display()))
+            .ok_or_else(|| EmpsError::MissingColumn {
+                path: path.to_path_buf(),
+                column: name,
+                found: table.header.join(", "),
+            })
     };
     let t = col("t")?;
     if t.len() < 3 {
-        return Err(format!("{}: fewer than 3 samples", path.display()));
+        return Err(EmpsError::TooShort {
+            path: path.to_path_buf(),
+            samples: t.len(),
+        });
     }
     let pulses_v = col("pulses_N").unwrap_or_else(|_| vec![0.0; t.len()]);
     Ok(ClosedLoopRun {

@@ -192,9 +192,6 @@ pub enum IdentError {
     /// Loading failed.
     #[error(transparent)]
     Data(#[from] crate::data::DataError),
-    /// Something else.
-    #[error("{0}")]
-    Other(String),
 }
 
 /// Filtered position, velocity and acceleration of one coordinate.

@@ -36,6 +36,8 @@ pub fn require(name: &str) -> Option<PathBuf> {
     if std::env::var_os("CI").is_some() {
         panic!("{why}; CI is set, so this is a failure");
     }
-    eprintln!("skipped {why}");
+    // straight to stderr, past the test harness's capture, so the skip shows in the log
+    use std::io::Write as _;
+    let _ = writeln!(std::io::stderr(), "skipped {why}");
     None
 }

@@ -7,9 +7,9 @@
 //!   of every `tanh` model; backgrounds show the hybrid rope mode (red: negative, yellow:
 //!   stopped, green: positive).
 
+use crate::error::{Error, Result};
 use crate::output::Outputs;
 use crate::study::{tanh_name, CaseData};
-use anyhow::{Context, Result};
 use crane_model::Mode;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -34,15 +34,17 @@ pub fn write(
 ) -> Result<Vec<PathBuf>> {
     let p1 = dir.join("case1_trolley_velocity.svg");
     let mut svg = String::new();
-    case1_fig(&mut svg, case1)
-        .map_err(|e| anyhow::anyhow!("{e}"))
-        .with_context(|| format!("plot {}", p1.display()))?;
+    case1_fig(&mut svg, case1).map_err(|e| Error::Plot {
+        path: p1.clone(),
+        message: e.to_string(),
+    })?;
     outputs.write(&p1, svg)?;
     let p2 = dir.join("case2_rope.svg");
     let mut svg = String::new();
-    case2_fig(&mut svg, case2)
-        .map_err(|e| anyhow::anyhow!("{e}"))
-        .with_context(|| format!("plot {}", p2.display()))?;
+    case2_fig(&mut svg, case2).map_err(|e| Error::Plot {
+        path: p2.clone(),
+        message: e.to_string(),
+    })?;
     outputs.write(&p2, svg)?;
     Ok(vec![p1, p2])
 }

@@ -4,6 +4,7 @@
 //! paper (hybrid friction against `tanh(gamma v)` smoothing) and its pieces, usable from the
 //! `crane` binary, the tests and the benches.
 //!
+//! - [`error`]: the library's error type ([`error::Error`]).
 //! - [`cases`]: the paper's two simulation cases, with every value the paper leaves open fixed.
 //! - [`smooth`]: the comparison dynamics (`tanh` friction, axes outside a case held exactly)
 //!   and the bare dynamics without friction logic, on the model's own `dynamics::eval`; fixed
@@ -21,6 +22,7 @@
 #![forbid(unsafe_code)]
 
 pub mod cases;
+pub mod error;
 pub mod figures;
 pub mod montecarlo;
 pub mod ode45;

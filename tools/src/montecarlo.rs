@@ -10,7 +10,7 @@
 //! thread count or schedule.
 
 use crate::cases::Case;
-use anyhow::{anyhow, Result};
+use crate::error::{Error, Result};
 use crane_model::{Config, Crane, FrictionLaw, Mode};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -99,11 +99,18 @@ pub fn simulate(seed: u64, index: u64, duration: f64, h: f64) -> Result<Outcome>
         },
         case.init,
     )
-    .map_err(|e| anyhow!("{e}"))?;
+    .map_err(|error| Error::Setup {
+        what: "Monte Carlo model",
+        error,
+    })?;
     let n = (duration / h).round() as u64;
     let mut rest_from = None;
     for k in 0..n {
-        crane.step([0.0; 3]).map_err(|e| anyhow!("{e}"))?;
+        crane.step([0.0; 3]).map_err(|error| Error::Step {
+            what: "Monte Carlo model",
+            t: crane.time(),
+            error,
+        })?;
         if crane.modes()[1] == Mode::Stopped {
             rest_from.get_or_insert((k + 1) as f64 * h);
         } else {
