@@ -3,12 +3,11 @@
 
 use crane_diagnose::{diagnose_dataset, Baseline, DiagnoseOptions};
 use crane_ident::data::{load_run, Dataset, DatasetSpec, RunKind, RunSpec};
-use std::path::PathBuf;
 
 const GTAU: f64 = 35.150651882485;
 
 fn emps() -> Dataset {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/emps");
+    let dir = crane_ident::shared_data::root().join("emps");
     let mut spec = DatasetSpec::minimal(0.0);
     spec.gain_n_per_v = Some(GTAU);
     spec.columns.insert("x".into(), "qm".into());

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 const GTAU: f64 = 35.150651882485;
 
 fn emps_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/emps")
+    crane_ident::shared_data::root().join("emps")
 }
 
 fn load(file: &str) -> crane_ident::data::AxisRun {
