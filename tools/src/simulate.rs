@@ -135,6 +135,12 @@ pub const MAX_STEPS: f64 = 1e8;
 pub const MAX_SAMPLES: f64 = 1e6;
 /// Plausible range of `payload_kg` [kg].
 pub const PAYLOAD_RANGE_KG: (f64, f64) = (1e-4, 100.0);
+/// Largest initial rate `|qd0[i]|` [m/s or rad/s].
+pub const MAX_RATE: f64 = 100.0;
+/// Largest `|offset_v|`, `|amplitude_v|` of an input term [V] (the inputs saturate at 12 V).
+pub const MAX_VOLTS: f64 = 1000.0;
+/// Highest `frequency_hz` of an input term [Hz].
+pub const MAX_FREQUENCY_HZ: f64 = 1e4;
 
 /// What `crane simulate` wrote.
 #[derive(Clone, Debug, Serialize)]
@@ -170,6 +176,24 @@ fn check_ranges(sc: &Scenario) -> Result<()> {
     let samples = d / sc.sample_s;
     if samples > MAX_SAMPLES {
         bail!("scenario: duration_s / sample_s = {samples:.3e} CSV rows; at most {MAX_SAMPLES:e} (shorten duration_s or raise sample_s)");
+    }
+    for (i, v) in sc.qd0.iter().enumerate() {
+        if !(v.abs() <= MAX_RATE) {
+            bail!(
+                "scenario: qd0[{i}] = {v} is outside the plausible range [-{MAX_RATE}, {MAX_RATE}]"
+            );
+        }
+    }
+    for (k, t) in sc.input.iter().enumerate() {
+        for (name, v, max) in [
+            ("offset_v", t.offset_v, MAX_VOLTS),
+            ("amplitude_v", t.amplitude_v, MAX_VOLTS),
+            ("frequency_hz", t.frequency_hz, MAX_FREQUENCY_HZ),
+        ] {
+            if !(v.abs() <= max) {
+                bail!("scenario: input[{k}].{name} = {v} is outside the plausible range [-{max}, {max}]");
+            }
+        }
     }
     if let Some(m) = sc.payload_kg {
         let (lo, hi) = PAYLOAD_RANGE_KG;

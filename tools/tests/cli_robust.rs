@@ -109,7 +109,7 @@ fn implausible_options_are_refused() {
 }
 
 #[test]
-fn huge_scenarios_are_refused_before_writing() {
+fn implausible_scenarios_are_refused_before_writing() {
     let d = tmp("huge");
     for (name, text, what) in [
         ("long.toml", "duration_s = 1e9\n", "duration_s"),
@@ -118,6 +118,12 @@ fn huge_scenarios_are_refused_before_writing() {
             "rows.toml",
             "duration_s = 5000\nh = 0.001\nsample_s = 0.001\n",
             "rows",
+        ),
+        ("rate.toml", "qd0 = [1e300, 0.0, 0.0, 0.0, 0.0]\n", "qd0[0]"),
+        (
+            "volts.toml",
+            "[[input]]\naxis = \"x\"\namplitude_v = 1e308\n",
+            "input[0].amplitude_v",
         ),
     ] {
         std::fs::write(d.join(name), text).unwrap();
