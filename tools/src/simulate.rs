@@ -178,7 +178,7 @@ fn check_ranges(sc: &Scenario) -> Result<()> {
         bail!("scenario: duration_s / sample_s = {samples:.3e} CSV rows; at most {MAX_SAMPLES:e} (shorten duration_s or raise sample_s)");
     }
     for (i, v) in sc.qd0.iter().enumerate() {
-        if !(v.abs() <= MAX_RATE) {
+        if !(v.is_finite() && v.abs() <= MAX_RATE) {
             bail!(
                 "scenario: qd0[{i}] = {v} is outside the plausible range [-{MAX_RATE}, {MAX_RATE}]"
             );
@@ -190,7 +190,7 @@ fn check_ranges(sc: &Scenario) -> Result<()> {
             ("amplitude_v", t.amplitude_v, MAX_VOLTS),
             ("frequency_hz", t.frequency_hz, MAX_FREQUENCY_HZ),
         ] {
-            if !(v.abs() <= max) {
+            if !(v.is_finite() && v.abs() <= max) {
                 bail!("scenario: input[{k}].{name} = {v} is outside the plausible range [-{max}, {max}]");
             }
         }
