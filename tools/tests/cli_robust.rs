@@ -258,3 +258,35 @@ fn demo_then_validate_and_the_data_set_repros() {
     assert!(!status.success());
     assert!(stderr(&o).contains("range"), "{}", stderr(&o));
 }
+
+/// `crane diagnose --json` prints the report as the one JSON document on stdout (it used to
+/// take a file name); `--report FILE` writes it too. On the real EMPS data of
+/// `examples/emps` (skipped without them, failing under `CI`).
+#[test]
+fn diagnose_json_is_one_document_on_stdout() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let example = root.join("examples/emps");
+    if !example.join("../../../shared/data/emps").is_dir() {
+        // the example reads ../shared/data beside the clone
+        let _ = crane_ident::shared_data::require("emps");
+        return;
+    }
+    let d = tmp("diagnose");
+    let o = crane(
+        &d,
+        &[
+            "diagnose",
+            example.to_str().unwrap(),
+            "--symmetric",
+            "--json",
+            "--report",
+            "r.json",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value =
+        serde_json::from_slice(&o.stdout).expect("diagnose --json: exactly one JSON document");
+    let file: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(d.join("r.json")).unwrap()).unwrap();
+    assert_eq!(v, file);
+}
