@@ -670,9 +670,9 @@ pub fn diagnose_crane(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Di
             false,
             "built-in defaults (shared/MODEL.md) with each run's declared payload".to_string(),
         ),
-        Baseline::Params(p) => (Params::from(p), false, "the given parameters".to_string()),
+        Baseline::Params(p) => (*p, false, "the given parameters".to_string()),
         Baseline::Fit(p) => (
-            p.as_ref().map(Params::from).unwrap_or_default(),
+            p.unwrap_or_default(),
             true,
             "dry magnitudes and viscous coefficients per drive and direction re-fitted by inverse dynamics on the fitting part".to_string(),
         ),

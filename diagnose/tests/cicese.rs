@@ -16,21 +16,12 @@ use crane_diagnose::{diagnose, DiagnoseOptions, Report};
 use std::path::{Path, PathBuf};
 
 fn example(name: &str) -> Option<PathBuf> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let shared = root.join("../shared/data/cicese");
-    if !shared.is_dir() {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI is set but {} is missing",
-            shared.display()
-        );
-        eprintln!(
-            "skipped: {} not found (the real CICESE data)",
-            shared.display()
-        );
-        return None;
-    }
-    Some(root.join("examples").join(name))
+    crane_ident::shared_data::require("cicese")?;
+    Some(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../examples")
+            .join(name),
+    )
 }
 
 fn run(name: &str) -> Option<(Report, PathBuf)> {

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 const GTAU: f64 = 35.150651882485;
 
 fn emps() -> Dataset {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/emps");
+    let dir = crane_ident::shared_data::root().join("emps");
     let mut spec = DatasetSpec::minimal(0.0);
     spec.gain_n_per_v = Some(GTAU);
     spec.columns.insert("x".into(), "qm".into());
@@ -46,6 +46,9 @@ fn opts(baseline: Baseline) -> DiagnoseOptions {
 
 #[test]
 fn emps_symmetric_model_misses_the_direction_dependence() {
+    if crane_ident::shared_data::require("emps").is_none() {
+        return;
+    }
     let r = diagnose_dataset(&emps(), &opts(Baseline::Symmetric)).unwrap();
     eprintln!("{}", r.to_json());
     let m = &r.measures;
@@ -95,6 +98,9 @@ fn emps_symmetric_model_misses_the_direction_dependence() {
 
 #[test]
 fn emps_paper_structure_claims_no_delay_that_zero_fits_as_well() {
+    if crane_ident::shared_data::require("emps").is_none() {
+        return;
+    }
     let r = diagnose_dataset(&emps(), &opts(Baseline::Auto)).unwrap();
     eprintln!("{}", r.to_json());
     let m = &r.measures;
@@ -125,6 +131,9 @@ fn emps_paper_structure_claims_no_delay_that_zero_fits_as_well() {
 
 #[test]
 fn emps_closed_loop_plots_are_written() {
+    if crane_ident::shared_data::require("emps").is_none() {
+        return;
+    }
     let dir = std::env::temp_dir().join(format!("crane-diagnose-emps-{}", std::process::id()));
     let o = DiagnoseOptions {
         baseline: Baseline::Symmetric,

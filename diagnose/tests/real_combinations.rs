@@ -11,21 +11,9 @@ use crane_ident::data::{load_dataset, RunKind};
 use std::path::Path;
 
 fn root() -> Option<std::path::PathBuf> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let shared = root.join("../shared/data");
-    if !shared.is_dir() {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI is set but {} is missing",
-            shared.display()
-        );
-        eprintln!(
-            "skipped: {} not found (the real data sets)",
-            shared.display()
-        );
-        return None;
-    }
-    Some(root)
+    crane_ident::shared_data::require("cicese")?;
+    crane_ident::shared_data::require("emps")?;
+    Some(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
 }
 
 /// A small seeded generator (splitmix64): the subsets are the same on every run.

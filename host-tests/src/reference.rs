@@ -1,6 +1,6 @@
 //! Independent reference implementation of the hybrid crane model (f64, `std`).
 //!
-//! Written directly from `shared/MODEL.md` (equations, conventions) and `model/NUMERICS.md`
+//! Written directly from `docs/MODEL.md` (equations, conventions) and `model/NUMERICS.md`
 //! (the floating-point contract, including the end-stop impulse, the swing domain and the
 //! "Extensions" section). It is meant to be read as the specification: plain functions on
 //! plain arrays, one expression per line of the contract, in the contract's operation order,
@@ -125,7 +125,7 @@ pub struct RefParams {
 }
 
 impl RefParams {
-    /// The INTECO 3D-Crane defaults, typed in again from the tables of `shared/MODEL.md`
+    /// The INTECO 3D-Crane defaults, typed in again from the tables of `docs/MODEL.md`
     /// (independently of `crane_model::Params::default()`, so the two can be compared).
     pub fn model_md_defaults() -> Self {
         RefParams {
@@ -330,6 +330,9 @@ pub enum RefError {
     /// The state after the step left the domain `sin(alpha) cos(beta) >= MIN_HANG`; the step
     /// was rejected.
     OutOfDomain,
+    /// A drive position after the step was outside its limits (axis index); the step was
+    /// rejected.
+    OutOfLimits(usize),
 }
 
 impl fmt::Display for RefError {
@@ -343,6 +346,7 @@ impl fmt::Display for RefError {
             RefError::Singular => write!(f, "singular mass matrix"),
             RefError::NonFiniteState => write!(f, "non-finite state"),
             RefError::OutOfDomain => write!(f, "state outside the swing domain"),
+            RefError::OutOfLimits(i) => write!(f, "drive {i} outside its limits"),
         }
     }
 }
@@ -1333,7 +1337,7 @@ impl RefCrane {
     /// A non-finite input is rejected; otherwise it is saturated to +-12 V, then delayed and
     /// dead-banded if those extensions are on. A step whose evaluation fails (`Singular`),
     /// whose result is not finite (`NonFiniteState`) or is outside the swing domain
-    /// (`OutOfDomain`) is rejected. On any error the state, the modes, the time, the last
+    /// (`OutOfDomain`) or leaves a drive outside its limits (`OutOfLimits`) is rejected. On any error the state, the modes, the time, the last
     /// input and the delay line stay as they were.
     pub fn step(&mut self, u: [f64; 3]) -> Result<RefStepInfo, RefError> {
         if u.iter().any(|v| !v.is_finite()) {
@@ -1362,6 +1366,11 @@ impl RefCrane {
         }
         if !in_domain(&y.q) {
             return Err(RefError::OutOfDomain);
+        }
+        if let Some(i) =
+            (0..3).find(|&i| !(y.q[i] >= self.p.axes[i].min && y.q[i] <= self.p.axes[i].max))
+        {
+            return Err(RefError::OutOfLimits(i));
         }
         self.y = y;
         self.modes = modes;

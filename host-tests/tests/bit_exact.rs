@@ -30,7 +30,7 @@ fn axis_factors() -> impl Strategy<Value = (f64, f64, f64, f64, [f64; 5], [f64; 
     )
 }
 
-/// Random valid parameters: the MODEL.md defaults, perturbed.
+/// Random valid parameters: the docs/MODEL.md defaults, perturbed.
 fn params_strategy() -> impl Strategy<Value = Params> {
     (
         0.05f64..0.6,
@@ -232,7 +232,7 @@ fn same_error(m: &StepError, r: &RefError) -> bool {
             | (StepError::Singular, RefError::Singular)
             | (StepError::NonFinite, RefError::NonFiniteState)
             | (StepError::OutOfDomain, RefError::OutOfDomain)
-    )
+    ) || matches!((m, r), (StepError::OutOfLimits { axis }, RefError::OutOfLimits(i)) if axis == i)
 }
 
 /// What one case exercised.
@@ -349,7 +349,8 @@ fn run_case(case: &Case, law: FrictionLaw, steps: usize) -> Result<Stats, TestCa
                 match a {
                     StepError::Singular => st.rejected[0] += 1,
                     StepError::NonFinite => st.rejected[1] += 1,
-                    StepError::OutOfDomain => st.rejected[2] += 1,
+                    // outside the swing domain or the limits
+                    StepError::OutOfDomain | StepError::OutOfLimits { .. } => st.rejected[2] += 1,
                     StepError::InputNotFinite { .. } => {}
                 }
                 last_rejected = true;

@@ -1,4 +1,4 @@
-//! The two errors of the paper's printed equations listed in `shared/MODEL.md`, each shown
+//! The two errors of the paper's printed equations listed in `docs/MODEL.md`, each shown
 //! against the model.
 //!
 //! Paper: seeds/000_21f9cb0c01998783.txt, equations (x completa), (y completa), (L completa),

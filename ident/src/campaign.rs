@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 /// Pendulum-free initial configuration at rest: mid-travel, hanging straight down.
 pub const HOME: [f64; 5] = [0.25, 0.30, 0.35, core::f64::consts::FRAC_PI_2, 0.0];
 
-/// Validation multisine of `shared/MODEL.md`: frequencies [Hz] of X, Y and the rope.
+/// Validation multisine of `docs/MODEL.md`: frequencies [Hz] of X, Y and the rope.
 pub const VALIDATION_FREQS: [[f64; 4]; 3] = [
     [0.135, 0.404, 0.673, 0.942],
     [0.105, 0.314, 0.523, 0.942],
@@ -426,28 +426,17 @@ pub fn run_campaign(
 
 /// Everything `crane rig` needs: the plant's true parameters, how the rig measures, and
 /// the campaign.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct RigOptions {
     /// The plant's true parameters (default: the paper's table; the payload is set per run).
-    pub truth: crate::params_file::ParamsFile,
+    pub truth: crane_model::Params,
     /// Measurement, noise and seed of the plant.
     pub plant: crate::rig::PlantConfig,
     /// The experiments.
     pub campaign: Campaign,
-    /// Known constants written into the data set (default: `shared/MODEL.md`).
+    /// Known constants written into the data set (default: `docs/MODEL.md`).
     pub constants: Constants,
-}
-
-impl Default for RigOptions {
-    fn default() -> Self {
-        RigOptions {
-            truth: crate::params_file::ParamsFile::from(&crane_model::Params::default()),
-            plant: crate::rig::PlantConfig::default(),
-            campaign: Campaign::default(),
-            constants: Constants::default(),
-        }
-    }
 }
 
 /// What `run_rig` did.
@@ -473,11 +462,11 @@ pub const TRUTH_FILE: &str = "truth_params.toml";
 /// needed), plus the true parameters as `truth_params.toml`.
 pub fn run_rig(out_dir: &Path, opts: &RigOptions) -> Result<RigSummary, CampaignError> {
     let t0 = std::time::Instant::now();
-    let truth = crane_model::Params::from(&opts.truth);
+    let truth = opts.truth;
     let mut rig = crate::rig::VirtualRig::new(truth, opts.plant);
     let res = run_campaign(&mut rig, &opts.campaign, &opts.constants, Some(out_dir))?;
     let path = out_dir.join(TRUTH_FILE);
-    opts.truth.write(&path).map_err(|e| CampaignError::Io {
+    crate::params_file::write(&path, &opts.truth).map_err(|e| CampaignError::Io {
         path,
         error: e.to_string(),
     })?;

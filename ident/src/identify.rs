@@ -20,7 +20,6 @@
 use crate::blr::{Blr, BlrOptions, FrictionCurve};
 use crate::data::{Constants, CraneRun, Dataset, RunKind};
 use crate::linalg::{lstsq, LsError, LsFit};
-use crate::params_file::ParamsFile;
 use crate::rig::{corrected_onset, detect_onset};
 use crate::signal::{butter, diff2_central, diff_central, Filter};
 use crane_model::Params;
@@ -176,7 +175,7 @@ pub struct Identified {
     /// Swing.
     pub swing: SwingResult,
     /// The model parameters (payload: the data set's `payload_kg`).
-    pub params: ParamsFile,
+    pub params: Params,
     /// Options used.
     pub options: IdentOptions,
 }
@@ -193,9 +192,6 @@ pub enum IdentError {
     /// Loading failed.
     #[error(transparent)]
     Data(#[from] crate::data::DataError),
-    /// Something else.
-    #[error("{0}")]
-    Other(String),
 }
 
 /// Filtered position, velocity and acceleration of one coordinate.
@@ -869,7 +865,7 @@ pub fn identify_dataset(ds: &Dataset, opt: &IdentOptions) -> Result<Identified, 
         x,
         y,
         swing,
-        params: ParamsFile::from(&p),
+        params: p,
         options: *opt,
     })
 }

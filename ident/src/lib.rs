@@ -18,14 +18,17 @@
 //! - [`identify`]: the paper's estimation pipeline; [`identify::identify`].
 //! - [`validate`]: NMAE of the payload position on validation runs; [`validate::validate`].
 //! - [`params_file`]: the model parameters as TOML.
+//! - [`shared_data`]: where the real data sets outside the repository are, for the tests
+//!   that skip without them.
+//! - [`atomic`]: atomic file writes (temporary file + rename), used for every output.
 //!
 //! Entry points for the command line:
 //! ```no_run
-//! use crane_ident::{campaign, identify, validate};
+//! use crane_ident::{campaign, identify, params_file, validate};
 //! let dir = std::path::Path::new("dataset");
 //! let summary = campaign::run_rig(dir, &campaign::RigOptions::default())?;
 //! let id = identify::identify(dir)?;                 // serde: Identified
-//! id.params.write(&dir.join("identified.toml"))?;    // TOML parameter file
+//! params_file::write(&dir.join("identified.toml"), &id.params)?; // TOML
 //! let report = validate::validate(&id.params, dir)?; // serde: ValidationReport
 //! println!("{}", report.table());
 //! # Ok::<(), Box<dyn std::error::Error>>(())
@@ -39,6 +42,7 @@
 // Units are written in brackets, `[m]`, `[N s/m]`: they are not intra-doc links.
 #![allow(rustdoc::broken_intra_doc_links)]
 
+pub mod atomic;
 pub mod blr;
 pub mod campaign;
 pub mod data;
@@ -48,6 +52,7 @@ pub mod linalg;
 pub mod params_file;
 pub mod rig;
 pub mod rng;
+pub mod shared_data;
 pub mod signal;
 pub mod simulate;
 pub mod validate;

@@ -1,133 +1,263 @@
 //! The model's parameters as a TOML file (what `crane identify` writes and `crane validate`
-//! reads). Field names and units as `crane_model::Params`.
+//! reads): exactly `crane_model::Params`, through its `serde` derives (field names and units
+//! as there), so there is one parameter type. Reading checks the syntax, the model's rules
+//! ([`Params::validate`]) and plausible magnitudes ([`plausible`]); every error names the file,
+//! the line and the field.
 
-use crane_model::{AxisParams, Params};
-use serde::{Deserialize, Serialize};
-use std::path::Path;
+use crane_model::Params;
+use std::path::{Path, PathBuf};
 
-/// One drive axis (see `crane_model::AxisParams`).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct AxisFile {
-    /// Reflected inertia `Jbar` [kg].
-    pub inertia: f64,
-    /// Gain `K` [N/V].
-    pub gain: f64,
-    /// Viscous `Dbar+` [N s/m].
-    pub viscous_pos: f64,
-    /// Viscous `Dbar-` [N s/m].
-    pub viscous_neg: f64,
-    /// Dry friction `Cbar+(p)` coefficients c0..c4 [N], p in m.
-    pub dry_pos: [f64; 5],
-    /// Dry friction `Cbar-(p)` coefficients c0..c4 [N].
-    pub dry_neg: [f64; 5],
-    /// Lower limit [m].
-    pub min: f64,
-    /// Upper limit [m].
-    pub max: f64,
+/// The parameter file's contents: the model's own parameter type.
+pub type ParamsFile = Params;
+
+/// Longest part of an offending TOML value echoed in an error message [characters].
+const MAX_ECHO: usize = 200;
+
+/// Why a parameter file was refused.
+#[derive(Debug, thiserror::Error)]
+pub enum ParamsError {
+    /// The file could not be read.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// Not TOML of the expected shape (unknown or missing field, wrong type...).
+    #[error("{}:{line}:{column}: {message}", path.display())]
+    Syntax {
+        /// The file.
+        path: PathBuf,
+        /// Line (1-based).
+        line: usize,
+        /// Column (1-based).
+        column: usize,
+        /// What is wrong (shortened to a few hundred characters).
+        message: String,
+    },
+    /// A value breaks the model's rules or is implausible.
+    #[error("{}:{line}: {error}", path.display())]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// Line of the field (1-based; 0 if it could not be found).
+        line: usize,
+        /// The field, its problem and value.
+        error: crane_model::Error,
+    },
 }
 
-/// All parameters (see `crane_model::Params`).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ParamsFile {
-    /// Payload `m_p` [kg].
-    pub payload_mass: f64,
-    /// Trolley `m_t` [kg].
-    pub trolley_mass: f64,
-    /// Rail `m_r` [kg].
-    pub rail_mass: f64,
-    /// Gravity [m/s^2].
-    pub gravity: f64,
-    /// X axis.
-    pub x: AxisFile,
-    /// Y axis.
-    pub y: AxisFile,
-    /// Rope.
-    pub rope: AxisFile,
-    /// `D_alpha` [kg m^2/s].
-    pub damping_alpha: f64,
-    /// `D_beta` [kg m^2/s].
-    pub damping_beta: f64,
+/// TOML text of `p` (the format `read` takes).
+pub fn to_toml(p: &Params) -> String {
+    toml::to_string_pretty(p).unwrap_or_default()
 }
 
-fn axis_file(a: &AxisParams) -> AxisFile {
-    AxisFile {
-        inertia: a.inertia,
-        gain: a.gain,
-        viscous_pos: a.viscous_pos,
-        viscous_neg: a.viscous_neg,
-        dry_pos: a.dry_pos,
-        dry_neg: a.dry_neg,
-        min: a.min,
-        max: a.max,
+/// Parses parameter-file text; `path` names the file in errors.
+pub fn parse(path: &Path, text: &str) -> Result<Params, ParamsError> {
+    let p: Params = toml::from_str(text).map_err(|e| {
+        let (line, column) = e
+            .span()
+            .map(|s| line_column(text, s.start))
+            .unwrap_or((0, 0));
+        let mut message = e.message().trim().to_string();
+        if message.chars().count() > MAX_ECHO {
+            message = message.chars().take(MAX_ECHO).collect::<String>() + "...";
+        }
+        ParamsError::Syntax {
+            path: path.to_path_buf(),
+            line,
+            column,
+            message,
+        }
+    })?;
+    p.validate()
+        .and_then(|()| plausible(&p))
+        .map_err(|error| ParamsError::Invalid {
+            path: path.to_path_buf(),
+            line: line_of_field(text, error.field),
+            error,
+        })?;
+    Ok(p)
+}
+
+/// Reads and checks a parameter file.
+pub fn read(path: &Path) -> Result<Params, ParamsError> {
+    let text = std::fs::read_to_string(path).map_err(|source| ParamsError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse(path, &text)
+}
+
+/// Writes a parameter file atomically (temporary file + rename).
+pub fn write(path: &Path, p: &Params) -> std::io::Result<()> {
+    crate::atomic::write(path, to_toml(p))
+}
+
+/// Largest magnitude accepted for masses [kg], inertias [kg], gains [N/V], viscous and dry
+/// friction [N s/m, N], swing damping [kg m^2/s] and limits [m]: far beyond any crane this
+/// model is for, far below what overflows its arithmetic.
+pub const MAX_MAGNITUDE: f64 = 1e6;
+/// Largest gravity accepted [m/s^2].
+pub const MAX_GRAVITY: f64 = 100.0;
+
+/// Plausible magnitudes (beyond [`Params::validate`]'s rules): every value at most
+/// [`MAX_MAGNITUDE`], gravity at most [`MAX_GRAVITY`]. The error names the field with
+/// `Problem::TooLarge`.
+pub fn plausible(p: &Params) -> Result<(), crane_model::Error> {
+    let too_large = |field: &'static str, value: f64, max: f64| {
+        if value.abs() > max {
+            Err(crane_model::Error {
+                field,
+                problem: crane_model::Problem::TooLarge,
+                value,
+            })
+        } else {
+            Ok(())
+        }
+    };
+    too_large("gravity", p.gravity, MAX_GRAVITY)?;
+    for (f, v) in [
+        ("payload_mass", p.payload_mass),
+        ("trolley_mass", p.trolley_mass),
+        ("rail_mass", p.rail_mass),
+        ("damping_alpha", p.damping_alpha),
+        ("damping_beta", p.damping_beta),
+    ] {
+        too_large(f, v, MAX_MAGNITUDE)?;
     }
-}
-
-fn axis_params(a: &AxisFile) -> AxisParams {
-    AxisParams {
-        inertia: a.inertia,
-        gain: a.gain,
-        viscous_pos: a.viscous_pos,
-        viscous_neg: a.viscous_neg,
-        dry_pos: a.dry_pos,
-        dry_neg: a.dry_neg,
-        min: a.min,
-        max: a.max,
-    }
-}
-
-impl From<&Params> for ParamsFile {
-    fn from(p: &Params) -> Self {
-        ParamsFile {
-            payload_mass: p.payload_mass,
-            trolley_mass: p.trolley_mass,
-            rail_mass: p.rail_mass,
-            gravity: p.gravity,
-            x: axis_file(&p.x),
-            y: axis_file(&p.y),
-            rope: axis_file(&p.rope),
-            damping_alpha: p.damping_alpha,
-            damping_beta: p.damping_beta,
+    const NAMES: [[&str; 8]; 3] = [
+        [
+            "x.inertia",
+            "x.gain",
+            "x.viscous_pos",
+            "x.viscous_neg",
+            "x.dry_pos",
+            "x.dry_neg",
+            "x.min",
+            "x.max",
+        ],
+        [
+            "y.inertia",
+            "y.gain",
+            "y.viscous_pos",
+            "y.viscous_neg",
+            "y.dry_pos",
+            "y.dry_neg",
+            "y.min",
+            "y.max",
+        ],
+        [
+            "rope.inertia",
+            "rope.gain",
+            "rope.viscous_pos",
+            "rope.viscous_neg",
+            "rope.dry_pos",
+            "rope.dry_neg",
+            "rope.min",
+            "rope.max",
+        ],
+    ];
+    for (a, n) in p.axes().into_iter().zip(NAMES) {
+        for (f, v) in [
+            (n[0], a.inertia),
+            (n[1], a.gain),
+            (n[2], a.viscous_pos),
+            (n[3], a.viscous_neg),
+            (n[6], a.min),
+            (n[7], a.max),
+        ] {
+            too_large(f, v, MAX_MAGNITUDE)?;
+        }
+        for &c in &a.dry_pos {
+            too_large(n[4], c, MAX_MAGNITUDE)?;
+        }
+        for &c in &a.dry_neg {
+            too_large(n[5], c, MAX_MAGNITUDE)?;
         }
     }
+    Ok(())
 }
 
-impl From<&ParamsFile> for Params {
-    fn from(p: &ParamsFile) -> Self {
-        Params {
-            payload_mass: p.payload_mass,
-            trolley_mass: p.trolley_mass,
-            rail_mass: p.rail_mass,
-            gravity: p.gravity,
-            x: axis_params(&p.x),
-            y: axis_params(&p.y),
-            rope: axis_params(&p.rope),
-            damping_alpha: p.damping_alpha,
-            damping_beta: p.damping_beta,
+/// 1-based line and column of byte `offset` in `text`.
+fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, column)
+}
+
+/// 1-based line of a dotted field (`"gravity"`, `"x.viscous_pos"`, `"rope.dry_neg[2]"`) in
+/// parameter-file text: the line of its key inside its table (`[x]`), or of the table as
+/// `x.viscous_pos = ...` or an inline table; 0 if not found.
+pub fn line_of_field(text: &str, field: &str) -> usize {
+    let field = field.split('[').next().unwrap_or(field);
+    let (table, key) = match field.split_once('.') {
+        Some((t, k)) => (Some(t), k),
+        None => (None, field),
+    };
+    let mut current: Option<String> = None;
+    let key_of = |line: &str| -> Option<String> {
+        let (k, _) = line.split_once('=')?;
+        Some(k.trim().trim_matches('"').to_string())
+    };
+    for (i, raw) in text.lines().enumerate() {
+        let line = raw.trim();
+        if line.starts_with('[') {
+            current = Some(
+                line.trim_matches(|c| c == '[' || c == ']')
+                    .trim()
+                    .to_string(),
+            );
+            continue;
+        }
+        let Some(k) = key_of(line) else { continue };
+        let hit = match (table, current.as_deref()) {
+            (None, None) => k == key,
+            (Some(t), Some(c)) => c == t && k == key,
+            (Some(t), None) => k == format!("{t}.{key}") || k == t,
+            (None, Some(_)) => false,
+        };
+        if hit {
+            return i + 1;
         }
     }
+    0
 }
 
-impl ParamsFile {
-    /// TOML text.
-    pub fn to_toml(&self) -> String {
-        toml::to_string_pretty(self).unwrap_or_default()
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trip_is_exact() {
+        let p = Params::default();
+        let q = parse(Path::new("p.toml"), &to_toml(&p)).unwrap();
+        assert_eq!(p, q);
     }
 
-    /// Reads a parameter file; errors name the file.
-    pub fn read(path: &Path) -> Result<ParamsFile, String> {
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let p: ParamsFile =
-            toml::from_str(&text).map_err(|e| format!("{}: {}", path.display(), e.message()))?;
-        Params::from(&p)
-            .validate()
-            .map_err(|e| format!("{}: {e}", path.display()))?;
-        Ok(p)
-    }
+    #[test]
+    fn errors_name_file_line_and_field() {
+        let text = to_toml(&Params::default());
+        let bad = text.replacen("gain = 3.2", "gain = -3.2", 1);
+        let e = parse(Path::new("p.toml"), &bad).unwrap_err();
+        let line = bad
+            .lines()
+            .position(|l| l.starts_with("gain = -3.2"))
+            .unwrap()
+            + 1;
+        let msg = e.to_string();
+        assert!(msg.starts_with(&format!("p.toml:{line}: ")), "{msg}");
+        assert!(msg.contains("x.gain"), "{msg}");
 
-    /// Writes a parameter file.
-    pub fn write(&self, path: &Path) -> std::io::Result<()> {
-        std::fs::write(path, self.to_toml())
+        let bad = text.replacen("gravity = 9.81", "gravity = 1e308", 1);
+        let msg = parse(Path::new("p.toml"), &bad).unwrap_err().to_string();
+        assert!(msg.contains("gravity") && msg.contains("p.toml:"), "{msg}");
+
+        let huge = format!("{text}\nnonsense = \"{}\"\n", "z".repeat(10_000_000));
+        let msg = parse(Path::new("p.toml"), &huge).unwrap_err().to_string();
+        assert!(msg.len() < 1000, "echoed {} bytes", msg.len());
+        assert!(msg.contains("nonsense"), "{msg}");
     }
 }

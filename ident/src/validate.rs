@@ -4,7 +4,6 @@
 //! physical range of that axis (X travel, Y travel, rope length range).
 
 use crate::data::{CraneRun, Dataset, RunKind};
-use crate::params_file::ParamsFile;
 use crane_model::{Config, Crane, FrictionLaw, Params, State};
 use serde::{Deserialize, Serialize};
 
@@ -58,15 +57,46 @@ impl ValidationReport {
     }
 }
 
+/// Why the simulation of one run failed.
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    /// The model rejected the parameters, the step or the run's first configuration (the
+    /// error names the field: `payload_mass`, `config.h`, `state.q[1]`...).
+    #[error("{0}")]
+    Setup(crane_model::Error),
+    /// The model rejected a step (e.g. "mass matrix not positive definite").
+    #[error("sample {sample} (t = {t} s, input u = {u:?} V): {error}")]
+    Step {
+        /// Sample index of the run (0-based; the line is this plus the header lines).
+        sample: usize,
+        /// Time of the sample [s].
+        t: f64,
+        /// The voltages held over the step [V].
+        u: [f64; 3],
+        /// What the model said.
+        error: crane_model::StepError,
+    },
+}
+
 /// Why validation failed.
 #[derive(Debug, thiserror::Error)]
 pub enum ValidateError {
     /// No validation run.
     #[error("the data set has no `validation` crane run")]
     NoRun,
-    /// Model rejected parameters or a step.
-    #[error("{0}")]
-    Model(String),
+    /// The data set did not load.
+    #[error(transparent)]
+    Data(#[from] crate::data::DataError),
+    /// The model failed on a run.
+    #[error("validation run `{run}` (payload {payload_kg} kg): {source}")]
+    Run {
+        /// Run file.
+        run: String,
+        /// The payload simulated [kg].
+        payload_kg: f64,
+        /// What failed.
+        source: SimError,
+    },
 }
 
 fn payload(q: &[f64; 5]) -> [f64; 3] {
@@ -79,7 +109,7 @@ fn payload(q: &[f64; 5]) -> [f64; 3] {
 /// Simulates `params` on the inputs of a crane run (model step = half the sampling period,
 /// voltages held over each sample) from the run's first recorded configuration at rest;
 /// returns the simulated `q` at every sample time.
-pub fn simulate_run(params: &Params, run: &CraneRun) -> Result<Vec<[f64; 5]>, ValidateError> {
+pub fn simulate_run(params: &Params, run: &CraneRun) -> Result<Vec<[f64; 5]>, SimError> {
     let dt = run.dt();
     let q0 = [run.x[0], run.y[0], run.l[0], run.alpha[0], run.beta[0]];
     let mut crane: Crane = Crane::new(
@@ -93,15 +123,18 @@ pub fn simulate_run(params: &Params, run: &CraneRun) -> Result<Vec<[f64; 5]>, Va
             qd: [0.0; 5],
         },
     )
-    .map_err(|e| ValidateError::Model(e.to_string()))?;
+    .map_err(SimError::Setup)?;
     let mut out = Vec::with_capacity(run.len());
     for k in 0..run.len() {
         out.push(crane.state().q);
         let u = [run.u[0][k], run.u[1][k], run.u[2][k]];
         for _ in 0..2 {
-            crane
-                .step(u)
-                .map_err(|e| ValidateError::Model(format!("t = {}: {e}", run.t[k])))?;
+            crane.step(u).map_err(|error| SimError::Step {
+                sample: k,
+                t: run.t[k],
+                u,
+                error,
+            })?;
         }
     }
     Ok(out)
@@ -123,10 +156,7 @@ pub fn nmae(run: &CraneRun, sim: &[[f64; 5]], ranges: [f64; 3]) -> [f64; 3] {
 
 /// Validates `params` on every `validation` run of a data set (payload from each run; an
 /// unloaded run simulates a 1 g hook).
-pub fn validate_dataset(
-    params: &ParamsFile,
-    ds: &Dataset,
-) -> Result<ValidationReport, ValidateError> {
+pub fn validate_dataset(params: &Params, ds: &Dataset) -> Result<ValidationReport, ValidateError> {
     let c = &ds.spec.constants;
     let ranges = [
         c.x_range_m[1] - c.x_range_m[0],
@@ -136,13 +166,17 @@ pub fn validate_dataset(
     let mut runs = Vec::new();
     for run in ds.of_kind(RunKind::Validation) {
         let Some(cr) = run.crane() else { continue };
-        let mut p = Params::from(params);
+        let mut p = *params;
         p.payload_mass = if run.payload_kg > 0.0 {
             run.payload_kg
         } else {
             0.001
         };
-        let sim = simulate_run(&p, cr)?;
+        let sim = simulate_run(&p, cr).map_err(|source| ValidateError::Run {
+            run: run.name.clone(),
+            payload_kg: p.payload_mass,
+            source,
+        })?;
         runs.push(RunValidation {
             run: run.name.clone(),
             payload_kg: run.payload_kg,
@@ -162,10 +196,9 @@ pub fn validate_dataset(
 
 /// Loads a data set directory and validates `params` on it.
 pub fn validate(
-    params: &ParamsFile,
+    params: &Params,
     dataset_dir: &std::path::Path,
 ) -> Result<ValidationReport, ValidateError> {
-    let ds =
-        crate::data::load_dataset(dataset_dir).map_err(|e| ValidateError::Model(e.to_string()))?;
+    let ds = crate::data::load_dataset(dataset_dir)?;
     validate_dataset(params, &ds)
 }

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 const GTAU: f64 = 35.150651882485;
 
 fn emps_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/emps")
+    crane_ident::shared_data::root().join("emps")
 }
 
 fn load(file: &str) -> crane_ident::data::AxisRun {
@@ -29,25 +29,13 @@ fn load(file: &str) -> crane_ident::data::AxisRun {
 
 /// `true` (skip, with a one-line reason) when the shared EMPS data are absent outside CI;
 /// panics when `CI` is set and they are absent.
-fn absent() -> bool {
-    let d = emps_dir();
-    if d.is_dir() {
-        return false;
-    }
-    if std::env::var_os("CI").is_some() {
-        panic!("CI is set but {} is absent", d.display());
-    }
-    eprintln!("skipped: {} is absent (EMPS data)", d.display());
-    true
-}
-
 fn within(x: f64, reference: f64, rel: f64) -> bool {
     ((x - reference) / reference).abs() <= rel
 }
 
 #[test]
 fn emps_symmetric_idim_ls_matches_the_published_fit() {
-    if absent() {
+    if crane_ident::shared_data::require("emps").is_none() {
         return;
     }
     let run = load("emps_estimation_raw.csv");
@@ -79,7 +67,7 @@ fn emps_symmetric_idim_ls_matches_the_published_fit() {
 
 #[test]
 fn emps_direction_dependent_idim_ls_matches_the_published_fit() {
-    if absent() {
+    if crane_ident::shared_data::require("emps").is_none() {
         return;
     }
     let run = load("emps_estimation_raw.csv");
@@ -101,7 +89,7 @@ fn emps_direction_dependent_idim_ls_matches_the_published_fit() {
 
 #[test]
 fn emps_fit_depends_on_the_processing() {
-    if absent() {
+    if crane_ident::shared_data::require("emps").is_none() {
         return;
     }
     // Without the benchmark's filtering the same least squares is far off: the test above
@@ -150,7 +138,7 @@ fn closed_loop_errors_with(model: IdimModel, ctl: crane_ident::emps::Controller)
 
 #[test]
 fn emps_closed_loop_force_errors() {
-    if absent() {
+    if crane_ident::shared_data::require("emps").is_none() {
         return;
     }
     let (se, sv) = closed_loop_errors(IdimModel::Symmetric);
@@ -167,7 +155,7 @@ fn emps_closed_loop_force_errors() {
 
 #[test]
 fn emps_closed_loop_force_error_depends_on_the_command_delay() {
-    if absent() {
+    if crane_ident::shared_data::require("emps").is_none() {
         return;
     }
     // The README's rig applies the command one sample later; without that delay the same

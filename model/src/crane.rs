@@ -64,6 +64,14 @@ pub enum StepError {
     NonFinite,
     /// The step would take the payload out of the model's domain ([`MIN_HANG`]).
     OutOfDomain,
+    /// The step would leave drive axis 0 (X), 1 (Y) or 2 (rope) outside its limits
+    /// (`min..=max`): the automaton's resets did not hold it, which stiff but valid
+    /// parameters (a drive axis far lighter than its gain and friction) can do at a given
+    /// step. A smaller step `h` is the remedy.
+    OutOfLimits {
+        /// Axis index.
+        axis: usize,
+    },
 }
 
 impl fmt::Display for StepError {
@@ -79,6 +87,13 @@ impl fmt::Display for StepError {
                 f,
                 "step would swing the payload above {MIN_HANG} of the rope below the trolley; step rejected"
             ),
+            StepError::OutOfLimits { axis } => {
+                let name = ["x", "y", "l"].get(*axis).copied().unwrap_or("axis");
+                write!(
+                    f,
+                    "step would leave `{name}` outside its limits (parameters too stiff for the step h); step rejected"
+                )
+            }
         }
     }
 }
@@ -160,6 +175,15 @@ fn admit<R: Real>(c: &Coeffs<R>, init: &State<f64>) -> Result<(State<R>, [Mode; 
         },
         modes,
     ))
+}
+
+/// The first drive axis whose position is outside its limits `min..=max`, if any (the
+/// contract of an accepted step: finite, inside the limits, in the swing domain).
+fn outside_limits<R: Real>(c: &Coeffs<R>, s: &State<R>) -> Option<usize> {
+    c.axes
+        .iter()
+        .zip(s.q)
+        .position(|(ax, q)| q < ax.min || q > ax.max)
 }
 
 /// `sin(alpha) cos(beta) >= MIN_HANG` (see [`MIN_HANG`]) for a state.
@@ -309,8 +333,10 @@ impl<R: Real> Crane<R> {
     /// Advances by one step `h` with input voltages `u = [u_x, u_y, u_l]` [V], held constant
     /// over the step and saturated to +-12 V.
     ///
-    /// A non-finite input, a singular mass matrix or a non-finite result rejects the step:
-    /// state, modes and time stay as they were.
+    /// A non-finite input, a singular mass matrix, a non-finite result, a result outside the
+    /// swing domain or a drive position outside its limits rejects the step: state, modes
+    /// and time stay as they were. An accepted step is finite, inside the limits and in the
+    /// swing domain, for every valid parameter set.
     pub fn step(&mut self, u: [R; 3]) -> Result<StepReport, StepError> {
         let lim = R::from_f64(U_MAX);
         let mut uc = [R::ZERO; 3];
@@ -356,6 +382,9 @@ impl<R: Real> Crane<R> {
         }
         if !in_domain(&state) {
             return Err(StepError::OutOfDomain);
+        }
+        if let Some(axis) = outside_limits(&self.coeffs, &state) {
+            return Err(StepError::OutOfLimits { axis });
         }
         self.state = state;
         self.modes = modes;

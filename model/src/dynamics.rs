@@ -1,6 +1,6 @@
 //! The continuous dynamics inside one mode: `M(q) qdd + h(q, qd) + G(q) = Q`.
 //!
-//! This is the energy-consistent Lagrangian form of `shared/MODEL.md` (the mass matrix
+//! This is the energy-consistent Lagrangian form of `docs/MODEL.md` (the mass matrix
 //! couples the rope to the trolley through `Jbar_l`, unlike the paper's printed coupling).
 //! Stopped drive axes are constrained to `qdd_i = 0`: their row and column of `M` are
 //! replaced by the unit vector and the holding force that friction must supply is computed

@@ -4,7 +4,7 @@
 //! 3D-Crane) with position- and direction-dependent dry friction, after Vicente-Martinez &
 //! Ramirez-Laboreo, "A hybrid dynamic model and parameter estimation method for accurately
 //! simulating overhead cranes with friction", in the energy-consistent form of
-//! `shared/MODEL.md`.
+//! `docs/MODEL.md`.
 //!
 //! Where to look:
 //! - [`dynamics`]: the equations of motion `M(q) qdd + h + G = Q` and the holding forces.

@@ -2,7 +2,7 @@
 //! guards that move a stopped axis into motion.
 //!
 //! Transitions (paper Fig. "Hybrid model of the 3 axis dynamics", made precise in
-//! `shared/MODEL.md`):
+//! `docs/MODEL.md`):
 //! - `Positive`/`Negative` -> `Stopped` when the velocity reaches 0 (reset `qd := 0`) or the
 //!   position reaches the limit it moves towards (reset `q := limit`, `qd := 0`). These are
 //!   located inside the step by the integrator.

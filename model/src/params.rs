@@ -11,7 +11,12 @@ use core::fmt;
 ///
 /// Sign convention: positive velocity is increasing coordinate (for the rope: lowering the
 /// payload). Friction magnitudes are non-negative; the model applies the sign.
+///
+/// With the `serde` feature: (de)serializable with these field names, unknown fields
+/// refused (the TOML parameter files of `crane-ident`).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct AxisParams {
     /// Reflected motor inertia `Jbar` [kg] (>= 0).
     pub inertia: f64,
@@ -33,7 +38,12 @@ pub struct AxisParams {
 }
 
 /// All parameters of the crane model.
+///
+/// With the `serde` feature: (de)serializable with these field names, unknown fields
+/// refused (the TOML parameter files of `crane-ident`).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct Params {
     /// Payload mass `m_p` [kg] (> 0).
     pub payload_mass: f64,
@@ -57,7 +67,7 @@ pub struct Params {
 }
 
 impl Default for Params {
-    /// The INTECO 3D-Crane parameters of `shared/MODEL.md` (paper's Table "Estimated System
+    /// The INTECO 3D-Crane parameters of `docs/MODEL.md` (paper's Table "Estimated System
     /// Parameters"), payload 0.457 kg.
     fn default() -> Self {
         Params {

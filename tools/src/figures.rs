@@ -7,8 +7,9 @@
 //!   of every `tanh` model; backgrounds show the hybrid rope mode (red: negative, yellow:
 //!   stopped, green: positive).
 
+use crate::error::{Error, Result};
+use crate::output::Outputs;
 use crate::study::{tanh_name, CaseData};
-use anyhow::{Context, Result};
 use crane_model::Mode;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -23,24 +24,35 @@ fn range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
-/// Writes both figures into `dir`; returns their paths.
-pub fn write(dir: &Path, case1: &CaseData, case2: &CaseData) -> Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir).with_context(|| format!("create {}", dir.display()))?;
+/// Writes both figures into `dir` (atomically, under the policy `outputs`); returns their
+/// paths.
+pub fn write(
+    dir: &Path,
+    case1: &CaseData,
+    case2: &CaseData,
+    outputs: &Outputs,
+) -> Result<Vec<PathBuf>> {
     let p1 = dir.join("case1_trolley_velocity.svg");
-    case1_fig(&p1, case1)
-        .map_err(|e| anyhow::anyhow!("{e}"))
-        .with_context(|| format!("plot {}", p1.display()))?;
+    let mut svg = String::new();
+    case1_fig(&mut svg, case1).map_err(|e| Error::Plot {
+        path: p1.clone(),
+        message: e.to_string(),
+    })?;
+    outputs.write(&p1, svg)?;
     let p2 = dir.join("case2_rope.svg");
-    case2_fig(&p2, case2)
-        .map_err(|e| anyhow::anyhow!("{e}"))
-        .with_context(|| format!("plot {}", p2.display()))?;
+    let mut svg = String::new();
+    case2_fig(&mut svg, case2).map_err(|e| Error::Plot {
+        path: p2.clone(),
+        message: e.to_string(),
+    })?;
+    outputs.write(&p2, svg)?;
     Ok(vec![p1, p2])
 }
 
-fn case1_fig(path: &Path, d: &CaseData) -> std::result::Result<(), Dyn> {
+fn case1_fig(svg: &mut String, d: &CaseData) -> std::result::Result<(), Dyn> {
     let c = &d.case;
     let i = c.observed;
-    let root = SVGBackend::new(path, (1000, 800)).into_drawing_area();
+    let root = SVGBackend::with_string(svg, (1000, 800)).into_drawing_area();
     root.fill(&WHITE)?;
     let panels = root.split_evenly((2, 1));
     let hyb: Vec<(f64, f64)> = d
@@ -159,9 +171,9 @@ where
     Ok(())
 }
 
-fn case2_fig(path: &Path, d: &CaseData) -> std::result::Result<(), Dyn> {
+fn case2_fig(svg: &mut String, d: &CaseData) -> std::result::Result<(), Dyn> {
     let c = &d.case;
-    let root = SVGBackend::new(path, (1000, 1100)).into_drawing_area();
+    let root = SVGBackend::with_string(svg, (1000, 1100)).into_drawing_area();
     root.fill(&WHITE)?;
     let panels = root.split_evenly((3, 1));
     let bands = bands(d);

@@ -4,6 +4,7 @@
 //! paper (hybrid friction against `tanh(gamma v)` smoothing) and its pieces, usable from the
 //! `crane` binary, the tests and the benches.
 //!
+//! - [`error`]: the library's error type ([`error::Error`]).
 //! - [`cases`]: the paper's two simulation cases, with every value the paper leaves open fixed.
 //! - [`smooth`]: the comparison dynamics (`tanh` friction, axes outside a case held exactly)
 //!   and the bare dynamics without friction logic, on the model's own `dynamics::eval`; fixed
@@ -15,13 +16,17 @@
 //!   stable RK4 step, the hybrid step at equal accuracy) and the paper's table.
 //! - [`figures`]: the paper's two figures (SVG).
 //! - [`montecarlo`]: many independent simulations over friction uncertainty on all cores.
+//! - [`output`]: where the command line writes: atomic writes that never replace an input or
+//!   a data set unless forced.
 
 #![forbid(unsafe_code)]
 
 pub mod cases;
+pub mod error;
 pub mod figures;
 pub mod montecarlo;
 pub mod ode45;
+pub mod output;
 pub mod reference;
 pub mod smooth;
 pub mod study;

@@ -2,13 +2,52 @@
 //! discrepancy workbench, with built-in defaults so `crane demo` runs the whole story; the
 //! paper's simulation study (`crane study`) and Monte Carlo throughput (`crane mc`).
 
+/// `println!` that returns the error (a closed pipe, `crane ... | head`) instead of
+/// panicking; `main` ends quietly on a broken pipe.
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout().lock(), $($arg)*)?
+    }};
+}
+
 mod plot;
 mod simulate;
 mod story;
 mod study_cmd;
 
+use anyhow::Result;
 use clap::{Parser, Subcommand};
+use serde::Serialize;
 use std::path::PathBuf;
+
+/// A clap value parser for a finite `f64` in `(lo, hi]` (`lo` excluded).
+fn within(lo: f64, hi: f64) -> impl Fn(&str) -> Result<f64> + Clone + Send + Sync + 'static {
+    move |s: &str| {
+        let v: f64 = s
+            .trim()
+            .parse()
+            .map_err(|e| anyhow::anyhow!("`{s}` is not a number ({e})"))?;
+        if !(v.is_finite() && v > lo && v <= hi) {
+            anyhow::bail!("{v} is outside the plausible range ({lo}, {hi}]");
+        }
+        Ok(v)
+    }
+}
+
+/// Prints `value` as the command's one JSON document on stdout.
+fn emit<T: Serialize>(value: &T) -> Result<()> {
+    out!("{}", serde_json::to_string_pretty(value)?);
+    Ok(())
+}
+
+/// Whether `e` comes from writing to a closed pipe.
+fn broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
 
 /// Hybrid friction model of an overhead crane: virtual rig, identification, validation,
 /// diagnosis.
@@ -24,9 +63,13 @@ enum Command {
     /// Whole story on built-in defaults: rig experiments, identification, validation table
     /// and plots, into one output directory.
     Demo {
-        /// Output directory.
-        #[arg(long, default_value = "out/demo")]
+        /// Output directory: `OUT/dataset`, `OUT/params.toml`, `OUT/plots` (with the default
+        /// `out`, `crane validate` then runs on the demo's results).
+        #[arg(long, default_value = "out")]
         out: PathBuf,
+        /// Replace a data set in `OUT/dataset` that the virtual rig did not write.
+        #[arg(long)]
+        force: bool,
         /// Print machine-readable results (JSON) instead of tables.
         #[arg(long)]
         json: bool,
@@ -39,6 +82,9 @@ enum Command {
         /// Random seed of the rig's noise.
         #[arg(long)]
         seed: Option<u64>,
+        /// Replace an existing, non-empty directory (an existing data set).
+        #[arg(long)]
+        force: bool,
         /// Print machine-readable results (JSON).
         #[arg(long)]
         json: bool,
@@ -54,6 +100,9 @@ enum Command {
         /// Directory for the friction plots with their 95 % bands (SVG).
         #[arg(long, default_value = "out/plots")]
         plots: PathBuf,
+        /// Let the outputs replace an input or a file of a data set.
+        #[arg(long)]
+        force: bool,
         /// Print machine-readable results (JSON).
         #[arg(long)]
         json: bool,
@@ -69,21 +118,30 @@ enum Command {
         /// Directory for the plots (SVG).
         #[arg(long, default_value = "out/plots")]
         plots: PathBuf,
+        /// Let the outputs replace an input or a file of a data set.
+        #[arg(long)]
+        force: bool,
         /// Print machine-readable results (JSON).
         #[arg(long)]
         json: bool,
     },
     /// Simulate a scenario file (TOML; default: the validation multisine) into a CSV run.
     Simulate {
-        /// Scenario file (see `tools/src/simulate.rs` for the format); default: built in.
+        /// Scenario file (TOML; every field is documented in the example
+        /// `examples/scenarios/step.toml` of the repository); default: built in (the
+        /// validation multisine).
         scenario: Option<PathBuf>,
-        /// CSV file to write.
+        /// CSV file to write (the plot goes beside it, same name with `.svg`).
         #[arg(long, default_value = "out/simulation.csv")]
         out: PathBuf,
+        /// Let the outputs replace an input or a file of a data set.
+        #[arg(long)]
+        force: bool,
         /// Print machine-readable results (JSON).
         #[arg(long)]
         json: bool,
     },
+    #[command(allow_negative_numbers = true)]
     /// The paper's simulation study: wall time and velocity RMSE of the hybrid model and of
     /// tanh(gamma v) friction (ode45 and fixed-step RK4) in its two cases, against a
     /// high-accuracy hybrid reference; the paper's table and its two figures (SVG).
@@ -97,21 +155,26 @@ enum Command {
         /// Skip the fixed-step RK4 search and the hybrid equal-accuracy search (faster).
         #[arg(long)]
         quick: bool,
-        /// Wall-time budget per timed model [s] (runs repeated, fastest reported).
-        #[arg(long, default_value_t = 0.3)]
+        /// Wall-time budget per timed model [s] (runs repeated, fastest reported), in
+        /// (0, 600].
+        #[arg(long, default_value_t = 0.3, value_parser = within(0.0, 600.0))]
         budget: f64,
+        /// Let the outputs replace an input or a file of a data set.
+        #[arg(long)]
+        force: bool,
     },
+    #[command(allow_negative_numbers = true)]
     /// Monte Carlo over friction uncertainty (case 1, trolley friction +-30 %) on all cores:
     /// throughput and the spread of the trolley's end position.
     Mc {
-        /// Number of simulations.
-        #[arg(long, default_value_t = 1000)]
-        sims: usize,
-        /// Simulated time of each [s].
-        #[arg(long, default_value_t = 10.0)]
+        /// Number of simulations, 1..=10000000.
+        #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
+        sims: u64,
+        /// Simulated time of each [s], in (0, 3600].
+        #[arg(long, default_value_t = 10.0, value_parser = within(0.0, 3600.0))]
         duration: f64,
-        /// Model step [s].
-        #[arg(long, default_value_t = 1e-3)]
+        /// Model step [s], in (0, 0.1]; at most 1e8 steps per simulation.
+        #[arg(long, default_value_t = 1e-3, value_parser = within(0.0, 0.1))]
         h: f64,
         /// Seed.
         #[arg(long, default_value_t = 1)]
@@ -135,67 +198,124 @@ enum Command {
         /// `M qdd + Fv qd + Fc sign(qd)` instead of the paper's structure (the EMPS story).
         #[arg(long, conflicts_with_all = ["params", "fit_baseline"])]
         symmetric: bool,
-        /// Write the report here (JSON).
+        /// Also write the report (JSON) to this file.
         #[arg(long)]
-        json: Option<PathBuf>,
+        report: Option<PathBuf>,
         /// Directory for residual plots (SVG).
         #[arg(long)]
         plots: Option<PathBuf>,
+        /// Let the outputs replace an input or a file of a data set.
+        #[arg(long)]
+        force: bool,
+        /// Print the report (JSON) on stdout instead of the text summary.
+        #[arg(long)]
+        json: bool,
     },
 }
 
-fn main() {
-    let cli = Cli::parse();
-    let result = match cli.command {
-        Command::Demo { out, json } => story::demo(&out, json),
-        Command::Rig { out, seed, json } => story::rig(&out, seed, json).map(|_| ()),
+fn run(command: Command) -> Result<()> {
+    match command {
+        Command::Demo { out, force, json } => {
+            let r = story::demo(&out, force, json)?;
+            if json {
+                emit(&r)?;
+            }
+        }
+        Command::Rig {
+            out,
+            seed,
+            force,
+            json,
+        } => {
+            let r = story::rig(&out, seed, force, json)?;
+            if json {
+                emit(&r)?;
+            }
+        }
         Command::Identify {
             dataset,
             out,
             plots,
+            force,
             json,
-        } => story::identify(&dataset, &out, &plots, json).map(|_| ()),
+        } => {
+            let r = story::identify(&dataset, &out, &plots, force, json)?;
+            if json {
+                emit(&r)?;
+            }
+        }
         Command::Validate {
             dataset,
             params,
             plots,
+            force,
             json,
-        } => story::validate(&dataset, &params, &plots, json).map(|_| ()),
+        } => {
+            let r = story::validate(&dataset, &params, &plots, force, json)?;
+            if json {
+                emit(&r)?;
+            }
+        }
         Command::Simulate {
             scenario,
             out,
+            force,
             json,
-        } => simulate::simulate(scenario.as_deref(), &out, json).map(|_| ()),
+        } => {
+            let r = simulate::simulate(scenario.as_deref(), &out, force, json)?;
+            if json {
+                emit(&r)?;
+            }
+        }
         Command::Study {
             out,
             json,
             quick,
             budget,
-        } => study_cmd::study(&out, json, quick, budget),
+            force,
+        } => study_cmd::study(&out, json, quick, budget, force)?,
         Command::Mc {
             sims,
             duration,
             h,
             seed,
             json,
-        } => study_cmd::mc(sims, duration, h, seed, json),
+        } => {
+            let s = study_cmd::mc(sims, duration, h, seed, json)?;
+            if json {
+                emit(&s)?;
+            }
+        }
         Command::Diagnose {
             dataset,
             params,
             fit_baseline,
             symmetric,
-            json,
+            report,
             plots,
+            force,
+            json,
         } => story::diagnose(
             &dataset,
             params.as_deref(),
             fit_baseline,
             symmetric,
-            json.as_deref(),
+            report.as_deref(),
             plots,
-        ),
-    };
-    if let Err(e) = result {
+            force,
+            json,
+        )?,
+    }
+    Ok(())
+}
+
+fn main() {
+    let cli = Cli::parse();
+    if let Err(e) = run(cli.command) {
+        if broken_pipe(&e) {
+            // `crane ... | head`: the reader has what it wanted
+            std::process::exit(0);
+        }
         eprintln!("crane: error: {e:#}");
         std::process::exit(1);
     }

@@ -10,7 +10,7 @@
 //! thread count or schedule.
 
 use crate::cases::Case;
-use anyhow::{anyhow, Result};
+use crate::error::{Error, Result};
 use crane_model::{Config, Crane, FrictionLaw, Mode};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -99,11 +99,18 @@ pub fn simulate(seed: u64, index: u64, duration: f64, h: f64) -> Result<Outcome>
         },
         case.init,
     )
-    .map_err(|e| anyhow!("{e}"))?;
+    .map_err(|error| Error::Setup {
+        what: "Monte Carlo model",
+        error,
+    })?;
     let n = (duration / h).round() as u64;
     let mut rest_from = None;
     for k in 0..n {
-        crane.step([0.0; 3]).map_err(|e| anyhow!("{e}"))?;
+        crane.step([0.0; 3]).map_err(|error| Error::Step {
+            what: "Monte Carlo model",
+            t: crane.time(),
+            error,
+        })?;
         if crane.modes()[1] == Mode::Stopped {
             rest_from.get_or_insert((k + 1) as f64 * h);
         } else {
@@ -120,10 +127,26 @@ pub fn simulate(seed: u64, index: u64, duration: f64, h: f64) -> Result<Outcome>
 
 /// `sims` simulations in parallel on the current rayon pool.
 pub fn run(sims: usize, duration: f64, h: f64, seed: u64) -> Result<(Summary, Vec<Outcome>)> {
+    run_with_progress(sims, duration, h, seed, || {})
+}
+
+/// [`run`], calling `done` after each finished simulation (from the worker threads; e.g. a
+/// progress bar's `inc(1)`). The results do not depend on `done`.
+pub fn run_with_progress(
+    sims: usize,
+    duration: f64,
+    h: f64,
+    seed: u64,
+    done: impl Fn() + Sync,
+) -> Result<(Summary, Vec<Outcome>)> {
     let t0 = Instant::now();
     let out: Result<Vec<Outcome>> = (0..sims as u64)
         .into_par_iter()
-        .map(|i| simulate(seed, i, duration, h))
+        .map(|i| {
+            let r = simulate(seed, i, duration, h);
+            done();
+            r
+        })
         .collect();
     let out = out?;
     let wall_s = t0.elapsed().as_secs_f64();

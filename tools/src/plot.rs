@@ -6,6 +6,7 @@ use crane_ident::data::{CraneRun, Dataset};
 use crane_ident::identify::{DryFit, Identified};
 use crane_ident::validate::ValidationReport;
 use crane_model::Mode;
+use crane_tools::output::Outputs;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -22,8 +23,12 @@ fn measured(run: &CraneRun) -> Vec<[f64; 3]> {
 }
 
 /// One SVG per validation run: x_p, y_p, z_p against time, measured and simulated.
-pub fn validation(ds: &Dataset, report: &ValidationReport, dir: &Path) -> Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir).with_context(|| format!("create {}", dir.display()))?;
+pub fn validation(
+    ds: &Dataset,
+    report: &ValidationReport,
+    dir: &Path,
+    outputs: &Outputs,
+) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
     for rv in &report.runs {
         let Some(run) = ds
@@ -45,25 +50,27 @@ pub fn validation(ds: &Dataset, report: &ValidationReport, dir: &Path) -> Result
             .and_then(|s| s.to_str())
             .unwrap_or("run");
         let path = dir.join(format!("validation_{stem}.svg"));
-        draw(&path, &run.t, &meas, &sim, &rv.nmae_pct)
+        let mut svg = String::new();
+        draw(&mut svg, &run.t, &meas, &sim, &rv.nmae_pct)
             .map_err(|e| anyhow::anyhow!("{e}"))
             .with_context(|| format!("plot {}", path.display()))?;
+        outputs.write(&path, svg)?;
         files.push(path);
     }
     Ok(files)
 }
 
 fn draw(
-    path: &Path,
+    svg: &mut String,
     t: &[f64],
     meas: &[[f64; 3]],
     sim: &[[f64; 3]],
     nmae: &[f64; 3],
 ) -> std::result::Result<(), Box<dyn std::error::Error>> {
-    let root = SVGBackend::new(path, (1000, 900)).into_drawing_area();
+    let root = SVGBackend::with_string(svg, (1000, 900)).into_drawing_area();
     root.fill(&WHITE)?;
     let panels = root.split_evenly((3, 1));
-    let t_end = t.last().copied().unwrap_or(1.0);
+    let t_span = span(0.0, t.last().copied().unwrap_or(1.0), "time")?;
     for (i, area) in panels.iter().enumerate() {
         let name = ["x_p [m]", "y_p [m]", "z_p [m]"][i];
         let vals = meas.iter().chain(sim.iter()).map(|p| p[i]);
@@ -76,7 +83,7 @@ fn draw(
             .margin(8)
             .x_label_area_size(30)
             .y_label_area_size(60)
-            .build_cartesian_2d(0.0..t_end, (lo - pad)..(hi + pad))?;
+            .build_cartesian_2d(t_span.clone(), span(lo - pad, hi + pad, name)?)?;
         chart.configure_mesh().x_desc("t [s]").y_desc(name).draw()?;
         chart
             .draw_series(LineSeries::new(
@@ -99,6 +106,24 @@ fn draw(
 }
 
 type Dyn = Box<dyn std::error::Error>;
+
+/// Widest axis span [units of the axis] a plot accepts: beyond it (or with a non-finite
+/// end) plotters' tick search does not terminate (`x_range_m = [-1e308, 1e308]` hung
+/// `crane identify`), and no physical quantity of this crane gets near it.
+pub const MAX_SPAN: f64 = 1e12;
+
+/// The range `lo..hi` of a plot axis, or an error naming the quantity when it is not
+/// plottable (non-finite, empty, or wider than [`MAX_SPAN`]).
+pub fn span(lo: f64, hi: f64, what: &str) -> std::result::Result<std::ops::Range<f64>, Dyn> {
+    let width = hi - lo;
+    if !(lo.is_finite() && hi.is_finite() && width > 0.0 && width <= MAX_SPAN) {
+        return Err(format!(
+            "cannot plot {what} over [{lo:e}, {hi:e}]: the range must be finite, non-empty and at most {MAX_SPAN:e} wide"
+        )
+        .into());
+    }
+    Ok(lo..hi)
+}
 
 /// Lowest and highest of `vals`, padded by 5 % (at least `min_pad`).
 fn padded(vals: impl Iterator<Item = f64>, min_pad: f64) -> (f64, f64) {
@@ -127,8 +152,8 @@ pub fn friction(
     id: &Identified,
     truth: Option<&crane_model::Params>,
     dir: &Path,
+    outputs: &Outputs,
 ) -> Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir).with_context(|| format!("create {}", dir.display()))?;
     let mut files = Vec::new();
     for (name, d, t) in [
         ("x", &id.x, truth.map(|t| &t.x)),
@@ -136,21 +161,23 @@ pub fn friction(
     ] {
         let path = dir.join(format!("friction_{name}.svg"));
         let truths = t.map(|t| [t.dry_pos, t.dry_neg]);
-        draw_friction(&path, name, [&d.dry_pos, &d.dry_neg], truths)
+        let mut svg = String::new();
+        draw_friction(&mut svg, name, [&d.dry_pos, &d.dry_neg], truths)
             .map_err(|e| anyhow::anyhow!("{e}"))
             .with_context(|| format!("plot {}", path.display()))?;
+        outputs.write(&path, svg)?;
         files.push(path);
     }
     Ok(files)
 }
 
 fn draw_friction(
-    path: &Path,
+    svg: &mut String,
     axis: &str,
     fits: [&DryFit; 2],
     truth: Option<[[f64; 5]; 2]>,
 ) -> std::result::Result<(), Dyn> {
-    let root = SVGBackend::new(path, (900, 800)).into_drawing_area();
+    let root = SVGBackend::with_string(svg, (900, 800)).into_drawing_area();
     root.fill(&WHITE)?;
     let panels = root.split_evenly((2, 1));
     for (i, (area, fit)) in panels.iter().zip(fits).enumerate() {
@@ -187,7 +214,10 @@ fn draw_friction(
             .margin(8)
             .x_label_area_size(35)
             .y_label_area_size(60)
-            .build_cartesian_2d(x0..x1, lo..hi)?;
+            .build_cartesian_2d(
+                span(x0, x1, &format!("{axis} position"))?,
+                span(lo, hi, "friction")?,
+            )?;
         chart
             .configure_mesh()
             .light_line_style(TRANSPARENT)
@@ -310,21 +340,21 @@ fn mode_runs(rec: &SimulationRecord, i: usize) -> Vec<(f64, f64, Mode)> {
 /// The run of `crane simulate` as one SVG: drive positions, velocities and voltages of X, Y
 /// and the rope against time, and a panel of mode bands (Negative / Stopped / Positive per
 /// drive).
-pub fn simulation(rec: &SimulationRecord, path: &Path) -> Result<()> {
-    if let Some(dir) = path.parent() {
-        std::fs::create_dir_all(dir).with_context(|| format!("create {}", dir.display()))?;
-    }
-    draw_simulation(rec, path)
+pub fn simulation(rec: &SimulationRecord, path: &Path, outputs: &Outputs) -> Result<()> {
+    let mut svg = String::new();
+    draw_simulation(rec, &mut svg)
         .map_err(|e| anyhow::anyhow!("{e}"))
-        .with_context(|| format!("plot {}", path.display()))
+        .with_context(|| format!("plot {}", path.display()))?;
+    outputs.write(path, svg)?;
+    Ok(())
 }
 
-fn draw_simulation(rec: &SimulationRecord, path: &Path) -> std::result::Result<(), Dyn> {
-    let root = SVGBackend::new(path, (1000, 1100)).into_drawing_area();
+fn draw_simulation(rec: &SimulationRecord, svg: &mut String) -> std::result::Result<(), Dyn> {
+    let root = SVGBackend::with_string(svg, (1000, 1100)).into_drawing_area();
     root.fill(&WHITE)?;
     let (top, bottom) = root.split_vertically(900);
     let panels = top.split_evenly((3, 1));
-    let t_end = rec.t.last().copied().unwrap_or(1.0).max(1e-9);
+    let t_span = span(0.0, rec.t.last().copied().unwrap_or(1.0).max(1e-9), "time")?;
     // at most ~2000 points per line
     let stride = (rec.t.len() / 2000).max(1);
     let names = ["x", "y", "L"];
@@ -347,7 +377,7 @@ fn draw_simulation(rec: &SimulationRecord, path: &Path) -> std::result::Result<(
             .margin(8)
             .x_label_area_size(30)
             .y_label_area_size(60)
-            .build_cartesian_2d(0.0..t_end, lo..hi)?;
+            .build_cartesian_2d(t_span.clone(), span(lo, hi, title)?)?;
         chart
             .configure_mesh()
             .light_line_style(TRANSPARENT)
@@ -381,7 +411,7 @@ fn draw_simulation(rec: &SimulationRecord, path: &Path) -> std::result::Result<(
         .margin(8)
         .x_label_area_size(30)
         .y_label_area_size(60)
-        .build_cartesian_2d(0.0..t_end, -0.5..2.5)?;
+        .build_cartesian_2d(t_span, -0.5..2.5)?;
     chart
         .configure_mesh()
         .disable_mesh()

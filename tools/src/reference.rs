@@ -7,7 +7,7 @@
 //! that the study reports.
 
 use crate::cases::Case;
-use anyhow::{bail, Context, Result};
+use crate::error::{Error, Result};
 use crane_model::{Config, Crane, FrictionLaw, Mode, State};
 use serde::Serialize;
 
@@ -114,13 +114,21 @@ pub fn plan(h: f64, sample: f64) -> Result<(usize, usize)> {
     if ratio >= 1.0 {
         let k = ratio.round();
         if (ratio - k).abs() > 1e-9 * k {
-            bail!("step {h} s does not divide the output grid {sample} s");
+            return Err(Error::Grid {
+                h,
+                sample,
+                why: "does not divide",
+            });
         }
         Ok((k as usize, 1))
     } else {
         let k = (h / sample).round();
         if (h / sample - k).abs() > 1e-9 * k {
-            bail!("step {h} s is not a multiple of the output grid {sample} s");
+            return Err(Error::Grid {
+                h,
+                sample,
+                why: "is not a multiple of",
+            });
         }
         Ok((1, k as usize))
     }
@@ -138,8 +146,10 @@ pub fn hybrid(case: &Case, h: f64, outputs: bool) -> Result<Trajectory> {
         },
         case.init,
     )
-    .map_err(|e| anyhow::anyhow!("{e}"))
-    .context("hybrid model of the case")?;
+    .map_err(|error| Error::Setup {
+        what: "hybrid model of the case",
+        error,
+    })?;
     let n_steps = (case.duration / h).round() as usize;
     let n_samples = n_steps / per;
     let mut tr = Trajectory {
@@ -156,7 +166,11 @@ pub fn hybrid(case: &Case, h: f64, outputs: bool) -> Result<Trajectory> {
         tr.states.push(c.state());
         tr.modes.push(c.modes());
         if outputs || dense {
-            let o = c.output().map_err(|e| anyhow::anyhow!("{e}"))?;
+            let o = c.output().map_err(|error| Error::Step {
+                what: "hybrid model output",
+                t: c.time(),
+                error,
+            })?;
             if outputs {
                 tr.friction.push(o.friction);
             }
@@ -169,9 +183,11 @@ pub fn hybrid(case: &Case, h: f64, outputs: bool) -> Result<Trajectory> {
     record(&crane, &mut tr)?;
     for n in 0..n_steps {
         let t = n as f64 * h;
-        let rep = crane
-            .step(case.u_step(t, h))
-            .map_err(|e| anyhow::anyhow!("{e} at t = {t} s"))?;
+        let rep = crane.step(case.u_step(t, h)).map_err(|error| Error::Step {
+            what: "hybrid model",
+            t,
+            error,
+        })?;
         tr.events += u64::from(rep.events);
         if (n + 1) % per == 0 {
             record(&crane, &mut tr)?;

@@ -2,7 +2,9 @@
 //! name with `.svg`: drive positions, velocities, voltages and mode bands).
 //!
 //! Scenario format (every field optional; the built-in default is the validation multisine of
-//! `shared/MODEL.md` on the default crane with a 0.064 kg payload):
+//! `docs/MODEL.md` on the default crane with a 0.064 kg payload; an example file is
+//! `examples/scenarios/step.toml`). Plausible ranges: `duration_s` in (0, 86400], `h` in
+//! [1e-6, 0.1], at most 1e8 steps and 1e6 CSV rows, `payload_kg` in [1e-4, 100]:
 //!
 //! ```toml
 //! duration_s = 20.0          # simulated time [s]
@@ -29,9 +31,11 @@
 //! it); it loads back with `crane_ident::data`.
 
 use anyhow::{bail, Context, Result};
-use crane_ident::params_file::ParamsFile;
+use crane_ident::atomic::AtomicFile;
+use crane_ident::params_file;
 use crane_model::{Config, Crane, FrictionLaw, Mode, Params, State};
-use serde::Deserialize;
+use crane_tools::output::{create_parent, OutputError, Outputs};
+use serde::{Deserialize, Serialize};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -73,7 +77,7 @@ struct Scenario {
 }
 
 impl Default for Scenario {
-    /// The validation multisine of MODEL.md (amplitudes chosen to move every axis).
+    /// The validation multisine of docs/MODEL.md (amplitudes chosen to move every axis).
     fn default() -> Self {
         let sines = |axis: &str, f: [f64; 4], a: f64| -> Vec<Term> {
             f.iter()
@@ -121,14 +125,107 @@ fn mode_code(m: Mode) -> i8 {
     }
 }
 
+/// Plausible range of the model step `h` [s].
+pub const H_RANGE: (f64, f64) = (1e-6, 0.1);
+/// Longest simulated time [s] of a scenario (one day).
+pub const MAX_DURATION_S: f64 = 86_400.0;
+/// Most model steps of one scenario (`duration_s / h`): about a minute of work.
+pub const MAX_STEPS: f64 = 1e8;
+/// Most CSV samples of one scenario (`duration_s / sample_s`; about 200 MB of CSV).
+pub const MAX_SAMPLES: f64 = 1e6;
+/// Plausible range of `payload_kg` [kg].
+pub const PAYLOAD_RANGE_KG: (f64, f64) = (1e-4, 100.0);
+/// Largest initial rate `|qd0[i]|` [m/s or rad/s].
+pub const MAX_RATE: f64 = 100.0;
+/// Largest `|offset_v|`, `|amplitude_v|` of an input term [V] (the inputs saturate at 12 V).
+pub const MAX_VOLTS: f64 = 1000.0;
+/// Highest `frequency_hz` of an input term [Hz].
+pub const MAX_FREQUENCY_HZ: f64 = 1e4;
+
+/// What `crane simulate` wrote.
+#[derive(Clone, Debug, Serialize)]
+pub struct SimulateSummary {
+    /// The CSV run.
+    pub csv: PathBuf,
+    /// Its plot.
+    pub svg: PathBuf,
+    /// Samples (rows) written.
+    pub samples: usize,
+}
+
+/// Checks the scenario's numbers against their plausible ranges, before any work.
+fn check_ranges(sc: &Scenario) -> Result<()> {
+    let d = sc.duration_s;
+    if !(d.is_finite() && d > 0.0 && d <= MAX_DURATION_S) {
+        bail!("scenario: duration_s = {d} is outside the plausible range (0, {MAX_DURATION_S}] s");
+    }
+    let (lo, hi) = H_RANGE;
+    if !(sc.h.is_finite() && sc.h >= lo && sc.h <= hi) {
+        bail!(
+            "scenario: h = {} is outside the plausible range [{lo:e}, {hi}] s",
+            sc.h
+        );
+    }
+    if !(sc.sample_s.is_finite() && sc.sample_s > 0.0) {
+        bail!("scenario: sample_s = {} must be > 0", sc.sample_s);
+    }
+    let steps = d / sc.h;
+    if steps > MAX_STEPS {
+        bail!("scenario: duration_s / h = {steps:.3e} steps; at most {MAX_STEPS:e} (shorten duration_s or raise h)");
+    }
+    let samples = d / sc.sample_s;
+    if samples > MAX_SAMPLES {
+        bail!("scenario: duration_s / sample_s = {samples:.3e} CSV rows; at most {MAX_SAMPLES:e} (shorten duration_s or raise sample_s)");
+    }
+    for (i, v) in sc.qd0.iter().enumerate() {
+        if !(v.is_finite() && v.abs() <= MAX_RATE) {
+            bail!(
+                "scenario: qd0[{i}] = {v} is outside the plausible range [-{MAX_RATE}, {MAX_RATE}]"
+            );
+        }
+    }
+    for (k, t) in sc.input.iter().enumerate() {
+        for (name, v, max) in [
+            ("offset_v", t.offset_v, MAX_VOLTS),
+            ("amplitude_v", t.amplitude_v, MAX_VOLTS),
+            ("frequency_hz", t.frequency_hz, MAX_FREQUENCY_HZ),
+        ] {
+            if !(v.is_finite() && v.abs() <= max) {
+                bail!("scenario: input[{k}].{name} = {v} is outside the plausible range [-{max}, {max}]");
+            }
+        }
+    }
+    if let Some(m) = sc.payload_kg {
+        let (lo, hi) = PAYLOAD_RANGE_KG;
+        if !(m.is_finite() && m >= lo && m <= hi) {
+            bail!("scenario: payload_kg = {m} is outside the plausible range [{lo:e}, {hi}] kg");
+        }
+    }
+    Ok(())
+}
+
 /// The plot written beside a CSV: same path with the extension `svg`.
 pub fn plot_path(csv: &Path) -> PathBuf {
     csv.with_extension("svg")
 }
 
-/// Runs a scenario file (or the default) and writes the CSV and its plot ([`plot_path`]);
-/// returns the number of samples.
-pub fn simulate(scenario: Option<&Path>, out: &Path, json: bool) -> Result<usize> {
+/// Runs a scenario file (or the default) and writes the CSV and its plot ([`plot_path`]),
+/// each atomically; neither may replace the scenario, its parameter file or a data set's file
+/// unless `force`.
+pub fn simulate(
+    scenario: Option<&Path>,
+    out: &Path,
+    force: bool,
+    json: bool,
+) -> Result<SimulateSummary> {
+    let svg = plot_path(out);
+    if svg == out {
+        return Err(OutputError::Clash {
+            out: out.to_path_buf(),
+            why: "the plot goes beside the CSV with the extension .svg; the CSV cannot be named .svg (use --out NAME.csv)",
+        }
+        .into());
+    }
     let (sc, base) = match scenario {
         Some(p) => {
             let text =
@@ -139,14 +236,20 @@ pub fn simulate(scenario: Option<&Path>, out: &Path, json: bool) -> Result<usize
         }
         None => (Scenario::default(), PathBuf::new()),
     };
+    check_ranges(&sc)?;
+    let mut outputs = Outputs::new(force);
+    if let Some(p) = scenario {
+        outputs = outputs.input(p);
+    }
+    if let Some(p) = &sc.params {
+        outputs = outputs.input(&base.join(p));
+    }
+    outputs.check(out)?;
+    outputs.check(&svg)?;
     let mut params = match &sc.params {
         Some(p) => {
             let path = base.join(p);
-            Params::from(
-                &ParamsFile::read(&path)
-                    .map_err(anyhow::Error::msg)
-                    .with_context(|| format!("parameters {}", path.display()))?,
-            )
+            params_file::read(&path).context("scenario: params")?
         }
         None => Params::default(),
     };
@@ -175,9 +278,6 @@ pub fn simulate(scenario: Option<&Path>, out: &Path, json: bool) -> Result<usize
         }
         terms.push((i, t.clone()));
     }
-    if !(sc.duration_s.is_finite() && sc.duration_s > 0.0) {
-        bail!("scenario: duration_s must be > 0 (got {})", sc.duration_s);
-    }
     let per = (sc.sample_s / sc.h).round();
     if !(per >= 1.0 && (per * sc.h - sc.sample_s).abs() <= 1e-9 * sc.sample_s.abs()) {
         bail!(
@@ -200,11 +300,8 @@ pub fn simulate(scenario: Option<&Path>, out: &Path, json: bool) -> Result<usize
         },
     )
     .map_err(|e| anyhow::anyhow!("scenario: {e}"))?;
-    if let Some(dir) = out.parent() {
-        std::fs::create_dir_all(dir).with_context(|| format!("create {}", dir.display()))?;
-    }
-    let file = std::fs::File::create(out).with_context(|| format!("create {}", out.display()))?;
-    let mut w = std::io::BufWriter::new(file);
+    create_parent(out)?;
+    let mut w = AtomicFile::create(out).with_context(|| format!("create {}", out.display()))?;
     writeln!(w, "# crane simulate: hybrid model, h = {} s", sc.h)?;
     writeln!(
         w,
@@ -259,27 +356,22 @@ pub fn simulate(scenario: Option<&Path>, out: &Path, json: bool) -> Result<usize
         if k < steps {
             crane
                 .step(u)
-                .map_err(|e| anyhow::anyhow!("t = {t} s: {e}"))?;
+                .map_err(|e| anyhow::anyhow!("scenario step at t = {t} s: {e}"))?;
         }
     }
-    w.flush()?;
-    let svg = plot_path(out);
-    crate::plot::simulation(&rec, &svg)?;
-    if json {
-        println!(
-            "{}",
-            serde_json::json!({
-                "csv": out.display().to_string(),
-                "svg": svg.display().to_string(),
-                "samples": samples,
-            })
-        );
-    } else {
-        println!(
+    w.commit()
+        .with_context(|| format!("write {}", out.display()))?;
+    crate::plot::simulation(&rec, &svg, &outputs)?;
+    if !json {
+        out!(
             "simulate: {samples} samples -> {}, plot {}",
             out.display(),
             svg.display()
         );
     }
-    Ok(samples)
+    Ok(SimulateSummary {
+        csv: out.to_path_buf(),
+        svg,
+        samples,
+    })
 }

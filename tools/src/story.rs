@@ -1,12 +1,15 @@
 //! The subcommands of the identification story: rig, identify, validate, diagnose, demo.
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use crane_diagnose::{Baseline, DiagnoseOptions};
+use crane_ident::campaign::TRUTH_FILE;
 use crane_ident::campaign::{run_rig, RigOptions, RigSummary};
 use crane_ident::identify::{Estimate, Identified};
-use crane_ident::params_file::ParamsFile;
+use crane_ident::params_file;
 use crane_ident::validate::ValidationReport;
+use crane_tools::output::{create_parent, is_dataset, OutputError, Outputs};
 use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -22,19 +25,72 @@ fn spinner(msg: &str) -> ProgressBar {
     pb
 }
 
-/// `crane rig`: the virtual rig's campaign into `out`.
-pub fn rig(out: &Path, seed: Option<u64>, json: bool) -> Result<RigSummary> {
+/// Runs the virtual rig into `out` atomically: the data set is written into a temporary
+/// directory beside `out` and renamed into place, so `out` holds the old data set or the new
+/// one, never a mix. An existing, non-empty `out` is refused unless `replace`.
+fn rig_into(out: &Path, opts: &RigOptions, replace: bool) -> Result<RigSummary> {
+    if out.exists() {
+        if !out.is_dir() {
+            bail!("{} exists and is not a directory", out.display());
+        }
+        let empty = std::fs::read_dir(out)
+            .with_context(|| format!("read {}", out.display()))?
+            .next()
+            .is_none();
+        if !empty && !replace {
+            if is_dataset(out) {
+                return Err(OutputError::ReplacesDataset {
+                    out: out.to_path_buf(),
+                    dataset: out.to_path_buf(),
+                }
+                .into());
+            }
+            bail!(
+                "{} exists and is not empty; refusing to write a data set into it (choose another --out, or pass --force)",
+                out.display()
+            );
+        }
+    }
+    create_parent(out)?;
+    let tmp = crane_ident::atomic::temp_beside(out);
+    let mut summary = match run_rig(&tmp, opts) {
+        Ok(s) => s,
+        Err(e) => {
+            let _ = std::fs::remove_dir_all(&tmp);
+            return Err(e).with_context(|| format!("rig into {}", out.display()));
+        }
+    };
+    let old = crane_ident::atomic::temp_beside(out);
+    let had_old = out.exists();
+    if had_old {
+        std::fs::rename(out, &old).with_context(|| format!("move {} aside", out.display()))?;
+    }
+    if let Err(e) = std::fs::rename(&tmp, out) {
+        if had_old {
+            let _ = std::fs::rename(&old, out);
+        }
+        let _ = std::fs::remove_dir_all(&tmp);
+        return Err(e).with_context(|| format!("rename the new data set to {}", out.display()));
+    }
+    if had_old {
+        std::fs::remove_dir_all(&old).with_context(|| format!("remove {}", old.display()))?;
+    }
+    summary.dir = out.to_path_buf();
+    Ok(summary)
+}
+
+/// `crane rig`: the virtual rig's campaign into `out` (refused over an existing, non-empty
+/// directory unless `force`).
+pub fn rig(out: &Path, seed: Option<u64>, force: bool, json: bool) -> Result<RigSummary> {
     let mut opts = RigOptions::default();
     if let Some(s) = seed {
         opts.plant.seed = s;
     }
     let pb = spinner("virtual rig: running the paper's experiments");
-    let summary = run_rig(out, &opts).with_context(|| format!("rig into {}", out.display()))?;
+    let summary = rig_into(out, &opts, force)?;
     pb.finish_and_clear();
-    if json {
-        println!("{}", serde_json::to_string_pretty(&summary)?);
-    } else {
-        println!(
+    if !json {
+        out!(
             "rig: {} runs, {} samples in {} ({:.1} s)",
             summary.runs,
             summary.samples,
@@ -42,7 +98,7 @@ pub fn rig(out: &Path, seed: Option<u64>, json: bool) -> Result<RigSummary> {
             summary.seconds
         );
         for p in &summary.probes {
-            println!(
+            out!(
                 "  breakaway probes {}{}: {} (max predictive std {:.3} N, stop: {:?})",
                 p.axis,
                 p.direction,
@@ -65,33 +121,35 @@ fn rig_truth(dataset: &Path) -> Result<Option<crane_model::Params>> {
     if !path.exists() {
         return Ok(None);
     }
-    let p = ParamsFile::read(&path)
-        .map_err(anyhow::Error::msg)
-        .with_context(|| format!("read {}", path.display()))?;
-    Ok(Some(crane_model::Params::from(&p)))
+    Ok(Some(params_file::read(&path)?))
 }
 
 /// `crane identify`: every parameter from a data set, written to `out` (TOML); friction
 /// plots with their bands into `plots` (SVG).
-pub fn identify(dataset: &Path, out: &Path, plots: &Path, json: bool) -> Result<Identified> {
+pub fn identify(
+    dataset: &Path,
+    out: &Path,
+    plots: &Path,
+    force: bool,
+    json: bool,
+) -> Result<Identified> {
+    let outputs = Outputs::new(force)
+        .input(&dataset.join(crane_ident::data::DATASET_FILE))
+        .input(&dataset.join(TRUTH_FILE));
+    // refuse before the work, not after it
+    outputs.check(out)?;
     let pb = spinner("identifying");
     let id = crane_ident::identify::identify(dataset)
         .with_context(|| format!("identify from {}", dataset.display()))?;
     pb.finish_and_clear();
-    if let Some(dir) = out.parent() {
-        std::fs::create_dir_all(dir).with_context(|| format!("create {}", dir.display()))?;
-    }
-    id.params
-        .write(out)
-        .with_context(|| format!("write {}", out.display()))?;
+    outputs.write(out, params_file::to_toml(&id.params))?;
     let truth = rig_truth(dataset)?;
-    let files = crate::plot::friction(&id, truth.as_ref(), plots)?;
+    let files = crate::plot::friction(&id, truth.as_ref(), plots, &outputs)?;
     if json {
-        println!("{}", serde_json::to_string_pretty(&id)?);
         return Ok(id);
     }
-    println!("identified parameters -> {}", out.display());
-    println!("| parameter | estimate ± std. error |\n|---|---|");
+    out!("identified parameters -> {}", out.display());
+    out!("| parameter | estimate ± std. error |\n|---|---|");
     let r = &id.rope;
     for (name, e) in [
         ("rope Jbar_l [kg]", &r.inertia),
@@ -99,7 +157,7 @@ pub fn identify(dataset: &Path, out: &Path, plots: &Path, json: bool) -> Result<
         ("rope Dbar_l [N s/m]", &r.viscous),
         ("rope Cbar_l [N]", &r.dry),
     ] {
-        println!("| {name} | {} |", est(e));
+        out!("| {name} | {} |", est(e));
     }
     for (axis, d) in [("X", &id.x), ("Y", &id.y)] {
         for (name, e) in [
@@ -108,7 +166,7 @@ pub fn identify(dataset: &Path, out: &Path, plots: &Path, json: bool) -> Result<
             ("Dbar+ [N s/m]", &d.viscous_pos),
             ("Dbar- [N s/m]", &d.viscous_neg),
         ] {
-            println!("| {axis} {name} | {} |", est(e));
+            out!("| {axis} {name} | {} |", est(e));
         }
         for (dir, f) in [("+", &d.dry_pos), ("-", &d.dry_neg)] {
             let c: Vec<String> = f.coefficients.iter().map(|c| format!("{c:.3}")).collect();
@@ -119,7 +177,7 @@ pub fn identify(dataset: &Path, out: &Path, plots: &Path, json: bool) -> Result<
                 .zip(&f.curve.mean)
                 .map(|(u, m)| u - m)
                 .fold(0.0, f64::max);
-            println!(
+            out!(
                 "| {axis} Cbar{dir}(p) c0..c4 [N] | {} ({} probes; 95 % band over the axis: mean ± {:.2} std, at most ± {:.3} N) |",
                 c.join(", "),
                 f.positions.len(),
@@ -128,10 +186,10 @@ pub fn identify(dataset: &Path, out: &Path, plots: &Path, json: bool) -> Result<
             );
         }
     }
-    println!("| D_alpha [kg m^2/s] | {} |", est(&id.swing.damping_alpha));
-    println!("| D_beta [kg m^2/s] | {} |", est(&id.swing.damping_beta));
+    out!("| D_alpha [kg m^2/s] | {} |", est(&id.swing.damping_alpha));
+    out!("| D_beta [kg m^2/s] | {} |", est(&id.swing.damping_beta));
     for f in files {
-        println!("plot: {}", f.display());
+        out!("plot: {}", f.display());
     }
     Ok(id)
 }
@@ -141,43 +199,48 @@ pub fn validate(
     dataset: &Path,
     params: &Path,
     plots: &Path,
+    force: bool,
     json: bool,
 ) -> Result<ValidationReport> {
-    let p = ParamsFile::read(params)
-        .map_err(anyhow::Error::msg)
-        .with_context(|| format!("read parameters {}", params.display()))?;
+    let outputs = Outputs::new(force).input(params);
+    let p = params_file::read(params).context("read parameters")?;
     let ds = crane_ident::data::load_dataset(dataset)
         .with_context(|| format!("load data set {}", dataset.display()))?;
     let report = crane_ident::validate::validate_dataset(&p, &ds)
         .with_context(|| format!("validate on {}", dataset.display()))?;
-    let files = crate::plot::validation(&ds, &report, plots)?;
-    if json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else {
-        println!("validation (payload position NMAE, normalised by each axis's range):");
-        print!("{}", report.table());
+    let files = crate::plot::validation(&ds, &report, plots, &outputs)?;
+    if !json {
+        out!("validation (payload position NMAE, normalised by each axis's range):");
+        out!("{}", report.table().trim_end());
         for f in files {
-            println!("plot: {}", f.display());
+            out!("plot: {}", f.display());
         }
     }
     Ok(report)
 }
 
-/// `crane diagnose`.
+/// `crane diagnose`: the text summary, or with `json` the report (JSON) on stdout; the
+/// report also into `report_file` if given.
+#[allow(clippy::too_many_arguments)]
 pub fn diagnose(
     dataset: &Path,
     params: Option<&Path>,
     fit_baseline: bool,
     symmetric: bool,
-    json: Option<&Path>,
+    report_file: Option<&Path>,
     plots: Option<PathBuf>,
+    force: bool,
+    json: bool,
 ) -> Result<()> {
+    let mut outputs = Outputs::new(force);
+    if let Some(p) = params {
+        outputs = outputs.input(p);
+    }
+    if let Some(r) = report_file {
+        outputs.check(r)?;
+    }
     let file = match params {
-        Some(p) => Some(
-            ParamsFile::read(p)
-                .map_err(anyhow::Error::msg)
-                .with_context(|| format!("read parameters {}", p.display()))?,
-        ),
+        Some(p) => Some(params_file::read(p).context("read parameters")?),
         None => None,
     };
     let baseline = match (fit_baseline, file) {
@@ -195,21 +258,43 @@ pub fn diagnose(
         .map_err(|e| anyhow::anyhow!("{e}"))
         .with_context(|| format!("diagnose {}", dataset.display()))?;
     pb.finish_and_clear();
-    if let Some(path) = json {
-        std::fs::write(path, report.to_json())
-            .with_context(|| format!("write {}", path.display()))?;
+    if let Some(path) = report_file {
+        outputs.write(path, report.to_json())?;
     }
-    print!("{}", report.summary());
+    if json {
+        out!("{}", report.to_json().trim_end());
+        return Ok(());
+    }
+    out!("{}", report.summary().trim_end());
     Ok(())
 }
 
-/// `crane demo`: rig, identification, validation, into `out`.
-pub fn demo(out: &Path, json: bool) -> Result<()> {
+/// What `crane demo --json` prints: one document with the three steps.
+#[derive(Serialize)]
+pub struct DemoReport {
+    /// The rig's campaign.
+    pub rig: RigSummary,
+    /// The identification.
+    pub identify: Identified,
+    /// The validation.
+    pub validate: ValidationReport,
+}
+
+/// `crane demo`: rig, identification, validation, into `out` (`out/dataset`,
+/// `out/params.toml`, `out/plots`: the defaults of `crane identify` and `crane validate` when
+/// `out` is `out`). A data set already in `out/dataset` is replaced only when the virtual rig
+/// wrote it (it holds `truth_params.toml`) or with `force`.
+pub fn demo(out: &Path, force: bool, json: bool) -> Result<DemoReport> {
     let dataset = out.join("dataset");
     let params = out.join("params.toml");
     let plots = out.join("plots");
-    rig(&dataset, None, json)?;
-    identify(&dataset, &params, &plots, json)?;
-    validate(&dataset, &params, &plots, json)?;
-    Ok(())
+    let ours = dataset.join(TRUTH_FILE).is_file();
+    let rig = rig(&dataset, None, force || ours, json)?;
+    let identify = identify(&dataset, &params, &plots, force, json)?;
+    let validate = validate(&dataset, &params, &plots, force, json)?;
+    Ok(DemoReport {
+        rig,
+        identify,
+        validate,
+    })
 }

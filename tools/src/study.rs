@@ -20,10 +20,10 @@
 //! ends (see [`Trajectory::velocity_at_grid`]).
 
 use crate::cases::{Case, CaseId};
+use crate::error::{Error, Result};
 use crate::ode45;
 use crate::reference::{self, Convergence, Trajectory};
 use crate::smooth::{pack, rk4_step_k1, unpack, Friction, Smooth, Y};
-use anyhow::{anyhow, Result};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -215,7 +215,7 @@ pub fn tanh_ode45(
         opts,
         |_, _, y| tr.states.push(unpack(y)),
     )
-    .map_err(|e| anyhow!("ode45, tanh({gamma} v): {e}"))?;
+    .map_err(|failure| Error::Ode45 { gamma, failure })?;
     tr.steps = stats.accepted;
     Ok((tr, stats))
 }
@@ -234,7 +234,7 @@ pub fn tanh_rk4(case: &Case, gamma: f64, h: f64) -> Result<Trajectory> {
         states: Vec::with_capacity(n_steps / per + 1),
         ..Trajectory::default()
     };
-    let fail = |t: f64| anyhow!("RK4, tanh({gamma} v): singular or not finite at t = {t}");
+    let fail = |t: f64| Error::Rk4 { gamma, t };
     let mut y = pack(&case.init);
     let mut k1 = sys.rhs(&y, &case.u_at(0.0)).map_err(|_| fail(0.0))?;
     tr.states.push(case.init);

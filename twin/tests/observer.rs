@@ -10,7 +10,7 @@ use crane_twin::board::SimBus;
 use crane_twin::hal::{HBridge, MotorDrive};
 use crane_twin::logic::control::{Controller, Io, LoopConfig, Trajectory, DEMO};
 use crane_twin::logic::feedforward::{saturate, voltages, Reference};
-use crane_twin::logic::io::{pwm_command, pwm_volts, EncoderScale, PWM_MAX};
+use crane_twin::logic::io::{pwm_command, pwm_volts, Channel, EncoderScale, PWM_MAX};
 use crane_twin::logic::observer::{Gains, Observer, Rejected};
 use crane_twin::logic::plant::{demo_plant, rig_params, run_demo, run_loop, SimPlant};
 
@@ -43,7 +43,7 @@ fn open_loop<R: Real>(
     let mut errs = Vec::new();
     for k in 0..periods {
         let c = plant.counts();
-        let y = [0, 1, 2, 3, 4].map(|i| R::from_f64(scale.position(i, c[i])));
+        let y = Channel::ALL.map(|ch| R::from_f64(scale.position(ch, c[ch.index()])));
         obs.update(applied.map(R::from_f64), y).expect("update");
         let (e, t) = (obs.state().to_f64(), plant.state());
         let mut dq = [0.0; 5];
@@ -524,4 +524,26 @@ fn demo_reference_is_smooth() {
     }
     assert_eq!(prev.vel, [0.0; 3]);
     let _ = run_loop::<f64, SimPlant, String>;
+}
+
+/// Issue 11: the encoder scale takes a typed channel (no index out of `[_; 5]`) and saturates
+/// its count instead of overflowing `c - 1` for far positions; the counters are `u64`.
+#[test]
+fn encoder_counts_saturate_and_counters_do_not_wrap() {
+    let s = EncoderScale::RIG;
+    for ch in Channel::ALL {
+        assert_eq!(s.counts(ch, 1e300), i32::MAX);
+        assert_eq!(s.counts(ch, -1e300), i32::MIN);
+        assert_eq!(s.counts(ch, f64::NAN), 0);
+        // floor of the cell, both sides of the zero
+        let z = s.position(ch, 0) - 0.5 * s.res[ch.index()];
+        assert_eq!(s.counts(ch, z + 0.25 * s.res[ch.index()]), 0);
+        assert_eq!(s.counts(ch, z - 0.25 * s.res[ch.index()]), -1);
+    }
+    // 2^32 periods of 2 ms are 99.4 days: the counters hold more
+    let c = crane_twin::logic::observer::Counters {
+        updates: u64::from(u32::MAX) + 1,
+        ..Default::default()
+    };
+    assert!(c.updates > u64::from(u32::MAX));
 }

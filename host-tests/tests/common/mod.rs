@@ -238,7 +238,7 @@ pub fn random_program(rng: &mut Rng, sat: f64) -> Program {
 }
 
 /// Mechanical energy `1/2 qd^T M qd + m_p g z_p` [J] of a model state, computed here from
-/// MODEL.md (independently of both implementations' evaluation order).
+/// docs/MODEL.md (independently of both implementations' evaluation order).
 pub fn energy(p: &Params, s: &State<f64>) -> f64 {
     let m = mass_matrix(p, &s.q);
     let mut kin = 0.0;
@@ -252,7 +252,7 @@ pub fn energy(p: &Params, s: &State<f64>) -> f64 {
     0.5 * kin + p.payload_mass * p.gravity * zp
 }
 
-/// `M(q)` of MODEL.md.
+/// `M(q)` of docs/MODEL.md.
 pub fn mass_matrix(p: &Params, q: &[f64; 5]) -> [[f64; 5]; 5] {
     let mp = p.payload_mass;
     let [_, _, l, a, b] = *q;

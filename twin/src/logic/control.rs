@@ -4,7 +4,7 @@
 //! host-side simulated plant implement.
 
 use super::feedforward::{saturate, voltages, Reference};
-use super::io::EncoderScale;
+use super::io::{Channel, EncoderScale};
 use super::observer::{Gains, Observer, Rejected, Update};
 use crane_model::{Error, Mode, Params, Real, State, MAX_SEGMENTS};
 
@@ -120,9 +120,9 @@ impl<R: Real> Controller<R> {
     /// Positions of encoder counts (a failed channel gives NaN, which the observer rejects).
     pub fn positions(&self, counts: &[Result<i32, IoError>; 5]) -> [R; 5] {
         let mut y = [R::ZERO; 5];
-        for (i, c) in counts.iter().enumerate() {
-            y[i] = match c {
-                Ok(c) => R::from_f64(self.scale.position(i, *c)),
+        for ((yi, c), ch) in y.iter_mut().zip(counts).zip(Channel::ALL) {
+            *yi = match c {
+                Ok(c) => R::from_f64(self.scale.position(ch, *c)),
                 Err(_) => R::from_f64(f64::NAN),
             };
         }

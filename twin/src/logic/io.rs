@@ -71,6 +71,38 @@ pub struct EncoderScale {
     pub zero: [f64; 5],
 }
 
+/// One of the five encoder channels, in model order. A channel is a type, not an index, so
+/// [`EncoderScale`] cannot be asked for a sixth one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Channel {
+    /// Rail position `x` [m].
+    X,
+    /// Trolley position `y` [m].
+    Y,
+    /// Rope length `L` [m].
+    L,
+    /// Swing angle `alpha` [rad].
+    Alpha,
+    /// Swing angle `beta` [rad].
+    Beta,
+}
+
+impl Channel {
+    /// The five channels in model order `x, y, L, alpha, beta`.
+    pub const ALL: [Channel; 5] = [
+        Channel::X,
+        Channel::Y,
+        Channel::L,
+        Channel::Alpha,
+        Channel::Beta,
+    ];
+
+    /// Index of the channel in model order (0..5).
+    pub const fn index(self) -> usize {
+        self as usize
+    }
+}
+
 /// Encoder counts per revolution of the INTECO rig.
 pub const COUNTS_PER_REV: f64 = 4096.0;
 
@@ -88,19 +120,23 @@ impl EncoderScale {
         zero: [0.0, 0.0, 0.0, FRAC_PI_2, 0.0],
     };
 
-    /// Count an ideal encoder reports at position `q` of channel `i` (floor of the cell).
-    pub fn counts(&self, i: usize, q: f64) -> i32 {
+    /// Count an ideal encoder reports at position `q` of channel `ch` (floor of the cell),
+    /// saturated to the `i32` range (NaN gives 0): no overflow whatever `q`.
+    pub fn counts(&self, ch: Channel, q: f64) -> i32 {
+        let i = ch.index();
         let x = (q - self.zero[i]) / self.res[i];
+        // `as` truncates towards zero, saturates and maps NaN to 0; one below for the floor
         let c = x as i32;
         if f64::from(c) > x {
-            c - 1
+            c.saturating_sub(1)
         } else {
             c
         }
     }
 
-    /// Position estimate of count `c` on channel `i`: the centre of its cell.
-    pub fn position(&self, i: usize, c: i32) -> f64 {
+    /// Position estimate of count `c` on channel `ch`: the centre of its cell.
+    pub fn position(&self, ch: Channel, c: i32) -> f64 {
+        let i = ch.index();
         self.zero[i] + (f64::from(c) + 0.5) * self.res[i]
     }
 }

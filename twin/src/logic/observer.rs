@@ -83,22 +83,23 @@ pub enum Rejected {
     },
 }
 
-/// Counters of what happened since start.
+/// Counters of what happened since start: `u64`, so they do not wrap in any service life
+/// (a `u32` of 2 ms periods wrapped after 99 days), and saturating.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Counters {
     /// Updates done.
-    pub updates: u32,
+    pub updates: u64,
     /// Updates rejected for a non-finite voltage.
-    pub bad_inputs: u32,
+    pub bad_inputs: u64,
     /// Measurements not used (non-finite).
-    pub bad_measurements: u32,
+    pub bad_measurements: u64,
     /// Twin steps the model rejected (the twin kept its state).
-    pub twin_errors: u32,
+    pub twin_errors: u64,
     /// Corrections the model rejected (the prediction was kept).
-    pub correction_errors: u32,
+    pub correction_errors: u64,
     /// Swing corrections skipped because they left the domain.
-    pub swing_skips: u32,
+    pub swing_skips: u64,
 }
 
 /// Result of one update.
@@ -203,10 +204,10 @@ impl<R: Real> Observer<R> {
     /// ended, then correct with the positions `y` [m, m, m, rad, rad] measured at its end.
     pub fn update(&mut self, u: [R; 3], y: [R; 5]) -> Result<Update<R>, Rejected> {
         if let Some(axis) = u.iter().position(|v| !v.is_finite()) {
-            self.counters.bad_inputs += 1;
+            self.counters.bad_inputs = self.counters.bad_inputs.saturating_add(1);
             return Err(Rejected::InputNotFinite { axis });
         }
-        self.counters.updates += 1;
+        self.counters.updates = self.counters.updates.saturating_add(1);
         // Predict: the model with the disturbance estimate as an equivalent voltage.
         let mut ut = u;
         for i in 0..3 {
@@ -214,10 +215,10 @@ impl<R: Real> Observer<R> {
         }
         let twin_error = self.twin.step(ut).err();
         if twin_error.is_some() {
-            self.counters.twin_errors += 1;
+            self.counters.twin_errors = self.counters.twin_errors.saturating_add(1);
         }
         if let Some(channel) = y.iter().position(|v| !v.is_finite()) {
-            self.counters.bad_measurements += 1;
+            self.counters.bad_measurements = self.counters.bad_measurements.saturating_add(1);
             return Err(Rejected::MeasurementNotFinite { channel });
         }
         // Correct.
@@ -247,7 +248,7 @@ impl<R: Real> Observer<R> {
             qd[3] = qd[3] + self.s_beta * r[3];
             qd[4] = qd[4] + self.s_beta * r[4];
         } else {
-            self.counters.swing_skips += 1;
+            self.counters.swing_skips = self.counters.swing_skips.saturating_add(1);
         }
         let corrected = State {
             q: q.map(R::to_f64),
@@ -255,7 +256,7 @@ impl<R: Real> Observer<R> {
         };
         // Same checks and mode rules as `Crane::new`; keeps extensions and the segment budget.
         if self.twin.set_state(corrected).is_err() {
-            self.counters.correction_errors += 1;
+            self.counters.correction_errors = self.counters.correction_errors.saturating_add(1);
         }
         for (ms, ri) in self.mean_sq.iter_mut().zip(r) {
             *ms = *ms + self.lambda * (ri * ri - *ms);

@@ -6,7 +6,7 @@
 
 use super::control::{Controller, Io, IoError, LoopConfig, Trajectory};
 use super::digest::{write_state, Fnv};
-use super::io::{pwm_command, pwm_volts, EncoderScale, Pwm};
+use super::io::{pwm_command, pwm_volts, Channel, EncoderScale, Pwm};
 use super::observer::Counters;
 use core::fmt::Write;
 use crane_model::{Config, Crane, Error, Params, Real, State};
@@ -78,7 +78,7 @@ impl SimPlant {
     /// Encoder counts of the current state.
     pub fn counts(&self) -> [i32; 5] {
         let s = self.crane.state();
-        [0, 1, 2, 3, 4].map(|i| self.scale.counts(i, s.q[i]))
+        Channel::ALL.map(|ch| self.scale.counts(ch, s.q[ch.index()]))
     }
 
     /// Advances one period with the current PWM commands (a rejected model step keeps the

@@ -255,6 +255,7 @@ fn code(r: &Result<crane_model::StepReport, StepError>) -> u8 {
         Err(StepError::Singular) => 0x81,
         Err(StepError::NonFinite) => 0x82,
         Err(StepError::OutOfDomain) => 0x83,
+        Err(StepError::OutOfLimits { .. }) => 0x84,
     }
 }
 
