@@ -36,3 +36,20 @@ tail -n 3 "$qemu_log"
 
 step "host tests (including the QEMU cross-checks, marked ignored for plain cargo test)"
 cargo test --workspace --exclude firmware -- --include-ignored
+
+# ---- python (issue 12): the `crane_twin` package in the shared venv, then its pytest -------
+# (bit-exactness against the `crane` CLI built above, Gymnasium check_env, seeded episodes,
+# bad input, the Ray example with 2 local workers). Measured: see BENCHMARKS.md "Python".
+python_venv() {
+  # The one shared venv of the CI; created if missing (other blocks may call this too).
+  local venv="${CARGO_TARGET_DIR:-target}/venv"
+  [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
+  printf '%s' "$venv"
+}
+step "python: crane_twin (venv, pip install ./python, pytest python/tests)"
+venv="$(python_venv)"
+"$venv/bin/python" -m pip install -q --disable-pip-version-check \
+  maturin==1.16.0 numpy==2.4.6 gymnasium==1.4.0 ray==2.60.0 pytest==9.2.0
+"$venv/bin/python" -m pip install -q --disable-pip-version-check --no-build-isolation ./python
+RAY_USAGE_STATS_ENABLED=0 "$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests
+# ---- end python ----------------------------------------------------------------------------

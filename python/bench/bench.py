@@ -50,12 +50,15 @@ class NumpyEpisodes(_Episodes):
         return obs, reward, self.t >= t.episode_steps, states
 
 
-def best(fn, repeat):
+def best(fn, repeat, cpu=False):
+    """Best of ``repeat`` runs: wall time, or this process's CPU time (``cpu``: robust to a
+    shared machine for single-threaded work)."""
+    clock = time.process_time if cpu else time.perf_counter
     times = []
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0 = clock()
         fn()
-        times.append(time.perf_counter() - t0)
+        times.append(clock() - t0)
     return min(times)
 
 
@@ -65,7 +68,7 @@ def stable_step_check():
     t = np.arange(2000) * 1e-3
     u = np.stack([3 * np.sin(2 * np.pi * 0.7 * t), 3 * np.sin(2 * np.pi * 0.5 * t), 0.5 * np.sin(2 * np.pi * 0.3 * t)], 1)
     out = {}
-    for h in (1e-3, 2e-3, 5e-3):
+    for h in (1e-3, 2e-3, 5e-3, 1e-2):
         k = int(round(h / 1e-3))
         uh = u[::k]
         model = NumpyCrane(ct.Params().to_dict(), 1, h)
@@ -100,20 +103,34 @@ def main() -> None:
     env.reset(seed=0)
     acts = rng.uniform(-12, 12, size=(steps, 3)).astype(np.float32)
     res["env_single_steps_per_s"] = steps / best(lambda: [env.step(a) for a in acts], args.repeat)
+    res["env_single_steps_per_s_cpu"] = steps / best(lambda: [env.step(a) for a in acts], args.repeat, cpu=True)
 
     venv = CraneAntiSwayVectorEnv(num_envs=num_envs, episode_steps=10**9)
     venv.reset(seed=0)
     vacts = rng.uniform(-12, 12, size=(steps // 4, num_envs, 3)).astype(np.float32)
     res["env_vector64_steps_per_s"] = len(vacts) * num_envs / best(lambda: [venv.step(a) for a in vacts], args.repeat)
+    res["env_vector64_steps_per_s_cpu"] = len(vacts) * num_envs / best(
+        lambda: [venv.step(a) for a in vacts], args.repeat, cpu=True
+    )
 
+    # The numpy model at its largest step (of 1, 2, 5, 10 ms) that stays within 1e-6 m of a
+    # run at a tenth of the step: the fairest (fastest) stable baseline, same 10 ms period.
+    check = stable_step_check()
+    res["stable_step_check"] = check
+    h_np = max(h for h, c in check.items() if c["finite"] and c["rust_vs_h_over_10"] < 1e-6)
+    res["numpy_h_s"] = h_np
+    np_task = Task(h=h_np, substeps=int(round(0.01 / h_np)), episode_steps=10**9)
     for m, key in ((1, "numpy_env_single_steps_per_s"), (num_envs, "numpy_env_vector64_steps_per_s")):
-        core = NumpyEpisodes(m, Task(episode_steps=10**9), ct.Params())
+        core = NumpyEpisodes(m, np_task, ct.Params())
         for i in range(m):
             core.reset_one(i, np.random.default_rng(i))
             core.y[i] = core.episodes[i][2]
         n = max(steps // 10, 20)
         a = rng.uniform(-12, 12, size=(n, m, 3))
         res[key] = n * m / best(lambda: [core.step(x) for x in a], args.repeat)
+        res[key + "_cpu"] = n * m / best(
+            lambda: [core.step(x) for x in a], args.repeat, cpu=True
+        )
 
     # Batch API: 5 s runs (5000 steps) of the hybrid model, 64 parameter sets.
     sims = 16 if args.quick else 64
@@ -124,12 +141,12 @@ def main() -> None:
         dt = best(lambda: ct.rollouts(plist, u, threads=threads), args.repeat)
         res[f"batch_sims_per_s_threads{threads}"] = sims / dt
         res[f"batch_steps_per_s_threads{threads}"] = sims * 5000 / dt
-    res["stable_step_check"] = stable_step_check()
+    res["batch_sims_per_s_threads1_cpu"] = sims / best(lambda: ct.rollouts(plist, u, threads=1), args.repeat, cpu=True)
     if args.json:
         print(json.dumps(res, indent=1))
         return
     for k, v in res.items():
-        print(f"{k:40s} {v:,.0f}" if isinstance(v, float) else f"{k}: {v}")
+        print(f"{k:42s} {v:,.4g}" if isinstance(v, float) else f"{k}: {v}")
 
 
 if __name__ == "__main__":

@@ -36,7 +36,8 @@ class NumpyCrane:
         self.hi = np.array([a["max"] for a in ax])
 
     def _dry(self, c: np.ndarray, q: np.ndarray) -> np.ndarray:
-        acc = c[:, 4]
+        """``Cbar(q)`` by Horner for positions ``q (m, 3)``, clamped at 0."""
+        acc = np.broadcast_to(c[:, 4], q.shape)
         for k in (3, 2, 1, 0):
             acc = acc * q + c[:, k]
         return np.maximum(acc, 0.0)
@@ -74,7 +75,7 @@ class NumpyCrane:
         v, p3 = qd[:, :3], q[:, :3]
         pos = v > 0
         visc = np.where(pos, self.vpos, self.vneg)
-        dry = np.where(pos, self._dry(self.cpos, p3.T).T, self._dry(self.cneg, p3.T).T)
+        dry = np.where(pos, self._dry(self.cpos, p3), self._dry(self.cneg, p3))
         f = visc * v + dry * np.tanh(self.gamma * v)
         Q = np.concatenate([self.gain * u - f, -(self.damp * qd[:, 3:])], axis=1)
         return np.linalg.solve(M, (Q - hv - gv)[..., None])[..., 0]
