@@ -71,20 +71,33 @@ struct Rows<'a> {
     payload: &'a mut [f64],
 }
 
+/// A zeroed vector of `len` elements, or an error instead of an abort when memory runs out.
+fn zeros<T: Copy + Default>(len: Option<usize>) -> Fallible<Vec<T>> {
+    let too_big = || {
+        Failure::Input("the result does not fit in memory; run fewer steps or simulations".into())
+    };
+    let len = len.ok_or_else(too_big)?;
+    let mut v = Vec::new();
+    v.try_reserve_exact(len).map_err(|_| too_big())?;
+    v.resize(len, T::default());
+    Ok(v)
+}
+
 impl Tables {
-    /// Zeroed tables.
-    pub fn new(sims: usize, rows: usize) -> Self {
-        let r = sims * rows;
-        Tables {
+    /// Zeroed tables; an `InputError` (not an abort) if they cannot be allocated.
+    pub fn new(sims: usize, rows: usize) -> Fallible<Self> {
+        let r = sims.checked_mul(rows);
+        let times = |k: usize| r.and_then(|r| r.checked_mul(k));
+        Ok(Tables {
             sims,
             rows,
-            q: vec![0.0; r * 5],
-            qd: vec![0.0; r * 5],
-            modes: vec![0; r * 3],
-            friction: vec![0.0; r * 3],
-            tension: vec![0.0; r],
-            payload: vec![0.0; r * 3],
-        }
+            q: zeros(times(5))?,
+            qd: zeros(times(5))?,
+            modes: zeros(times(3))?,
+            friction: zeros(times(3))?,
+            tension: zeros(r)?,
+            payload: zeros(times(3))?,
+        })
     }
 
     fn split(&mut self) -> Vec<Rows<'_>> {
@@ -137,7 +150,7 @@ fn run_rows(crane: &mut Crane, u: &[f64], rows: &mut Rows<'_>) -> Result<(), (us
 /// One rollout of `crane` over `u` (`n * 3` values), continuing from its current state.
 pub fn rollout(crane: &mut Crane, u: &[f64]) -> Fallible<Tables> {
     let n = u.len() / 3;
-    let mut t = Tables::new(1, n + 1);
+    let mut t = Tables::new(1, n + 1)?;
     let mut rows = t.split();
     if let Some(r) = rows.first_mut() {
         run_rows(crane, u, r).map_err(|(step, err)| Failure::Step {
@@ -162,7 +175,7 @@ pub enum Inputs<'a> {
 /// Runs every setup over its inputs (`n` steps) in parallel on the current rayon pool.
 /// The first failure (lowest simulation index) is returned, naming simulation and step.
 pub fn rollouts(setups: &[Setup], inputs: Inputs<'_>, n: usize) -> Fallible<Tables> {
-    let mut t = Tables::new(setups.len(), n + 1);
+    let mut t = Tables::new(setups.len(), n + 1)?;
     let mut rows = t.split();
     let per = n * 3;
     let result: Result<(), Failure> = rows
