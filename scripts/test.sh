@@ -44,12 +44,14 @@ python_venv() {
   # The one shared venv of the CI; created if missing (other blocks may call this too).
   local venv="${CARGO_TARGET_DIR:-target}/venv"
   [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
-  printf '%s' "$venv"
+  (cd "$venv" && pwd)
 }
 step "python: crane_twin (venv, pip install ./python, pytest python/tests)"
 venv="$(python_venv)"
 "$venv/bin/python" -m pip install -q --disable-pip-version-check \
   maturin==1.16.0 numpy==2.4.6 gymnasium==1.4.0 ray==2.60.0 pytest==9.2.0
-"$venv/bin/python" -m pip install -q --disable-pip-version-check --no-build-isolation ./python
+# Built with the venv's maturin (its PEP 517 hook runs `maturin` from PATH).
+PATH="$venv/bin:$PATH" "$venv/bin/python" -m pip install -q --disable-pip-version-check \
+  --no-build-isolation ./python
 RAY_USAGE_STATS_ENABLED=0 "$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests
 # ---- end python ----------------------------------------------------------------------------

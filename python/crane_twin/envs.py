@@ -17,6 +17,9 @@ the environment's seeded generator (domain randomisation).
 - Episodes have a fixed length (``episode_steps`` periods, default 500 = 5 s): never
   terminated, truncated at the end.
 
+A step the model rejects (a non-finite action: ``crane_twin.InputError``; a state leaving the
+model's domain: ``crane_twin.StepError``) raises instead of returning a made-up observation.
+
 ``CraneAntiSwayVectorEnv`` steps ``num_envs`` of these in one ``CraneBatch`` call (Rust, GIL
 released); its env ``i`` reset with seed ``s`` runs exactly as ``CraneAntiSwayEnv`` reset with
 seed ``s + i`` (the same bits).
