@@ -66,3 +66,22 @@ ensure_venv "fmpy>=0.3.32,<0.4" pytest
 CRANE_FMU="$fmu_target/crane.fmu" CRANE_BIN="$fmu_target/release/crane" \
   "$VENV_PY" -m pytest -q -p no:cacheprovider fmu/tests/test_fmu.py
 # ---- end FMU ------------------------------------------------------------------------------
+
+# ---- python (issue 12): the `crane_twin` package in the shared venv, then its pytest -------
+# (bit-exactness against the `crane` CLI built above, Gymnasium check_env, seeded episodes,
+# bad input, the Ray example with 2 local workers). Measured: see BENCHMARKS.md "Python".
+python_venv() {
+  # The one shared venv of the CI; created if missing (other blocks may call this too).
+  local venv="${CARGO_TARGET_DIR:-target}/venv"
+  [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
+  (cd "$venv" && pwd)
+}
+step "python: crane_twin (venv, pip install ./python, pytest python/tests)"
+venv="$(python_venv)"
+"$venv/bin/python" -m pip install -q --disable-pip-version-check \
+  maturin==1.16.0 numpy==2.4.6 gymnasium==1.4.0 ray==2.60.0 pytest==9.2.0
+# Built with the venv's maturin (its PEP 517 hook runs `maturin` from PATH).
+PATH="$venv/bin:$PATH" "$venv/bin/python" -m pip install -q --disable-pip-version-check \
+  --no-build-isolation ./python
+RAY_USAGE_STATS_ENABLED=0 "$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests
+# ---- end python ----------------------------------------------------------------------------

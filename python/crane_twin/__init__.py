@@ -1,0 +1,48 @@
+"""``crane_twin``: the overhead-crane digital twin (hybrid, exact-sticking dry friction) at
+native speed.
+
+- :class:`Crane`: one simulator, ``step(u)``, ``state``, ``modes``, ``output``, ``rollout(u)``.
+- :func:`rollout`, :func:`rollouts`: whole runs in Rust, the batch in parallel (rayon, GIL
+  released), results as numpy arrays.
+- :class:`Params`: parameters, to and from the ``crane`` CLI's TOML files.
+- :class:`CraneBatch`: simulators stepped together (the vector environment's engine).
+- Gymnasium: ``CraneAntiSway-v0`` is registered on import when gymnasium is installed
+  (:mod:`crane_twin.envs`).
+
+Units are SI; states are ``[x, y, L, alpha, beta, xd, yd, Ld, alphad, betad]``; inputs are
+the voltages ``[u_x, u_y, u_l]``, saturated to +-12 V.
+"""
+
+from __future__ import annotations
+
+from ._native import U_MAX, Crane, CraneBatch, Params, rollout, rollouts
+from .errors import CraneError, InputError, ParameterError, ParamsFileError, StepError
+
+__all__ = [
+    "Crane",
+    "CraneBatch",
+    "Params",
+    "rollout",
+    "rollouts",
+    "U_MAX",
+    "CraneError",
+    "InputError",
+    "ParameterError",
+    "ParamsFileError",
+    "StepError",
+]
+
+__version__ = "0.1.0"
+
+
+def _register() -> None:
+    try:
+        import gymnasium  # noqa: F401
+    except ImportError:  # the simulator works without gymnasium
+        return
+    from .envs import register
+
+    register()
+
+
+_register()
