@@ -43,6 +43,8 @@ pub fn problem_name(p: Problem) -> &'static str {
         Problem::AngleOutOfRange => "angle_out_of_range",
         Problem::BelowOne => "below_one",
         Problem::TooLarge => "too_large",
+        Problem::BelowKinetic => "below_kinetic",
+        Problem::NotANumber => "not_a_number",
     }
 }
 
@@ -53,6 +55,7 @@ pub fn step_kind(e: StepError) -> &'static str {
         StepError::Singular => "singular",
         StepError::NonFinite => "non_finite",
         StepError::OutOfDomain => "out_of_domain",
+        StepError::OutOfLimits { .. } => "out_of_limits",
     }
 }
 

@@ -1,22 +1,19 @@
 //! Parameters to and from the TOML files of the `crane` CLI.
 //!
-//! The only place that knows how parameters are (de)serialised: today through
-//! `crane_ident::params_file::ParamsFile`; when `crane_model::Params` gains its own serde
-//! derives, [`parse`] and [`render`] are the two bodies to switch.
+//! The only place that knows how parameters are (de)serialised: through
+//! `crane_ident::params_file` (serde on `crane_model::Params`), so a file the CLI writes is
+//! read here and the other way round.
 
-use crane_ident::params_file::ParamsFile;
 use crane_model::Params;
+use std::path::Path;
 
 /// Parses and validates a parameter file's text; `origin` (a path or `"<string>"`) prefixes
-/// every message, and TOML errors carry their line and column.
+/// every message, and TOML errors carry their line and the field.
 pub fn parse(text: &str, origin: &str) -> Result<Params, String> {
-    let file: ParamsFile = toml::from_str(text).map_err(|e| format!("{origin}: {e}"))?;
-    let params = Params::from(&file);
-    params.validate().map_err(|e| format!("{origin}: {e}"))?;
-    Ok(params)
+    crane_ident::params_file::parse(Path::new(origin), text).map_err(|e| e.to_string())
 }
 
 /// The TOML text of `params`, as `crane identify` writes it.
 pub fn render(params: &Params) -> Result<String, String> {
-    toml::to_string_pretty(&ParamsFile::from(params)).map_err(|e| e.to_string())
+    Ok(crane_ident::params_file::to_toml(params))
 }
