@@ -34,5 +34,17 @@ qemu_log="${CARGO_TARGET_DIR:-target}/qemu-run.log"
 timeout 300 cargo run -q -p firmware --target thumbv7em-none-eabihf --release > "$qemu_log"
 tail -n 3 "$qemu_log"
 
+# --- board-stm32 (issue 14): the STM32F405/407 firmware. Lints every feature set, links the
+# real-board build (`board`: clock, TIM1 PWM, encoder timers, pins; `probe`: defmt over RTT),
+# then builds the QEMU netduinoplus2 build LAST (same ELF path) for
+# host-tests/tests/stm32_board.rs (the `stm32_*` tests, run with --include-ignored below).
+step "board-stm32: clippy, board build, QEMU build"
+for feats in "" "board" "probe" "board,probe"; do
+  cargo clippy -p board-stm32 --target thumbv7em-none-eabihf --features "$feats" -- -D warnings
+done
+cargo build -p board-stm32 --target thumbv7em-none-eabihf --release --features board,probe
+cargo build -p board-stm32 --target thumbv7em-none-eabihf --release
+# --- end board-stm32
+
 step "host tests (including the QEMU cross-checks, marked ignored for plain cargo test)"
 cargo test --workspace --exclude firmware -- --include-ignored

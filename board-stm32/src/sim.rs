@@ -95,9 +95,10 @@ impl Io for SimIo<'_> {
     }
 
     fn write(&mut self, u: [f64; 3]) -> Result<[f64; 3], IoError> {
-        let before = self.sup.state();
+        // (the supervisor may also have tripped in `wait`: force the safe state whenever
+        // it is safe, not only on the transition)
         let state = self.sup.check(&self.inputs(), 0);
-        if state != before {
+        if let State::Safe(_) = state {
             regs::force_safe();
         }
         let out = self.sup.outputs(u);
