@@ -8,7 +8,8 @@ fn main() {
     std::fs::copy("memory.x", out.join("memory.x")).expect("copy memory.x to OUT_DIR");
     println!("cargo:rustc-link-search={}", out.display());
     if std::env::var_os("CARGO_FEATURE_PROBE").is_some() {
-        println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
+        // bins and the on-target tests
+        println!("cargo:rustc-link-arg=-Tdefmt.x");
     }
     println!("cargo:rerun-if-changed=memory.x");
     println!("cargo:rerun-if-changed=build.rs");

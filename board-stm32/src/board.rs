@@ -16,8 +16,8 @@
 //! | limits X-/X+, Y-/Y+, L-/L+ | PB8/PB9, PB10/PB11, PB12/PB13 | same |
 //! | log | PA2 | USART2 TX (the Nucleo's ST-LINK virtual COM port) |
 
-use crate::regs::{self, PwmTimer};
 use crate::{latched_counts, start_ticks, wait_tick, Log};
+use board_stm32::regs::{self, PwmTimer};
 use core::cell::RefCell;
 use core::fmt::Write;
 use crane_model::Params;

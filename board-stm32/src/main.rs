@@ -23,11 +23,10 @@
 
 #[cfg(feature = "board")]
 mod board;
-#[cfg_attr(not(feature = "board"), allow(dead_code))]
-mod regs;
 #[cfg(not(feature = "board"))]
 mod sim;
 
+use board_stm32::regs;
 use core::cell::RefCell;
 use core::fmt::Write;
 use core::panic::PanicInfo;

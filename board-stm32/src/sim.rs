@@ -10,8 +10,8 @@
 //!   periods in the safe state;
 //! - `hardfault`: a few periods, then an undefined instruction (HardFault).
 
-use crate::regs::{self, PwmTimer};
 use crate::{tick_counts, wait_tick, Log};
+use board_stm32::regs::{self, PwmTimer};
 use core::cell::RefCell;
 use core::fmt::Write;
 use cortex_m_semihosting::debug;
