@@ -2,7 +2,7 @@
  * Cortex-M4 cycle model for QEMU 7.2 TCG (plugin API version 1), for the crane firmware.
  *
  * Like icount.c it reports, for each interval between the instruction at `start=ADDR` and the
- * next one at `stop=ADDR`, a line "insns core art pess" to `out=FILE`:
+ * next one at `stop=ADDR`, a line "insns core art apess pess" to `out=FILE`:
  *   insns  executed instructions (exact);
  *   core   cycles with zero-wait memory: Cortex-M4 TRM (ARM DDI 0439B, table 3-1, and the FPU's
  *          table 7-1) per instruction class, pipeline refill P = 1 on a taken branch;
@@ -11,6 +11,9 @@
  *          and the prefetch buffer (a sequential next-line miss only stalls for the part of
  *          the 6-cycle line read that the previous line's execution did not cover; a jump to
  *          a missing line stalls 5 cycles);
+ *   apess  the pessimistic flash model with the ART on: P = 3, the same cache, but every miss
+ *          stalls the full 5 wait states (no prefetch overlap) and every PC-relative (literal)
+ *          load 5 more (as if the ART's data cache always missed);
  *   pess   P = 3 and no ART at all: every entry into another 128-bit line stalls 5 cycles and
  *          every PC-relative (literal) load 5 more: an upper bound for flash effects.
  * Class costs (core): data processing, MUL/MLA/UMULL/SMLAL, VADD/VSUB/VMUL/VCVT/VCMP/VMOV 1;
@@ -60,8 +63,8 @@ void qemu_plugin_register_atexit_cb(qemu_plugin_id_t, udata_cb, void *);
 
 __attribute__((visibility("default"))) int qemu_plugin_version = 1;
 
-enum { M_CORE, M_ART, M_PESS, NM };
-static const unsigned P[NM] = {1, 2, 3};
+enum { M_CORE, M_ART, M_APESS, M_PESS, NM };
+static const unsigned P[NM] = {1, 2, 3, 3};
 enum { WS = 5, LINE_READ = WS + 1, CACHE_LINES = 64, MAX_LINES = 64 };
 
 static uint64_t insns, cyc[NM], s_insns, s_cyc[NM], start_addr = 1, stop_addr = 1;
@@ -118,6 +121,7 @@ static void on_tb(unsigned int vcpu, void *u)
         int sequential = i > 0 || (fell_through && l == last_line + 1);
         cyc[M_PESS] += WS;
         if (!cache_access(l)) {
+            cyc[M_APESS] += WS;
             if (sequential) {
                 unsigned covered = i > 0 ? t->prev_cycles[i] : 0;
                 cyc[M_ART] += covered >= LINE_READ ? 0 : LINE_READ - covered;
@@ -140,9 +144,10 @@ static void on_start(unsigned int vcpu, void *u)
 static void on_stop(unsigned int vcpu, void *u)
 {
     (void)vcpu; (void)u;
-    fprintf(out, "%llu %llu %llu %llu\n", (unsigned long long)(insns - s_insns),
+    fprintf(out, "%llu %llu %llu %llu %llu\n", (unsigned long long)(insns - s_insns),
             (unsigned long long)(cyc[M_CORE] - s_cyc[M_CORE]),
             (unsigned long long)(cyc[M_ART] - s_cyc[M_ART]),
+            (unsigned long long)(cyc[M_APESS] - s_cyc[M_APESS]),
             (unsigned long long)(cyc[M_PESS] - s_cyc[M_PESS]));
 }
 
@@ -315,7 +320,7 @@ static void on_trans(qemu_plugin_id_t id, struct qemu_plugin_tb *tb)
         qemu_plugin_register_vcpu_insn_exec_inline(insn, QEMU_PLUGIN_INLINE_ADD_U64, &insns, 1);
         qemu_plugin_register_vcpu_insn_exec_inline(insn, QEMU_PLUGIN_INLINE_ADD_U64, &mix[cls], 1);
         for (int m = 0; m < NM; m++) {
-            uint64_t cm = c + ((branch && !cond) ? P[m] : 0) + ((m == M_PESS && literal) ? WS : 0);
+            uint64_t cm = c + ((branch && !cond) ? P[m] : 0) + (((m == M_PESS || m == M_APESS) && literal) ? WS : 0);
             qemu_plugin_register_vcpu_insn_exec_inline(insn, QEMU_PLUGIN_INLINE_ADD_U64, &cyc[m], cm);
         }
         if (i == n - 1) {
@@ -331,8 +336,9 @@ static void on_trans(qemu_plugin_id_t id, struct qemu_plugin_tb *tb)
 static void at_exit(qemu_plugin_id_t id, void *u)
 {
     (void)id; (void)u;
-    fprintf(out, "TOTAL %llu %llu %llu %llu\n", (unsigned long long)insns,
+    fprintf(out, "TOTAL %llu %llu %llu %llu %llu\n", (unsigned long long)insns,
             (unsigned long long)cyc[M_CORE], (unsigned long long)cyc[M_ART],
+            (unsigned long long)cyc[M_APESS],
             (unsigned long long)cyc[M_PESS]);
     for (int c = 0; c < NC; c++)
         fprintf(out, "MIX %s %llu\n", cname[c], (unsigned long long)mix[c]);
