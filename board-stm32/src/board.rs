@@ -216,7 +216,8 @@ pub fn run<W: Write>(p: Parts<'_, W>) -> i32 {
     // safe until power-cycled.
     let inputs = io.inputs();
     let armed = if watchdog_reset {
-        Err(Cause::Overrun)
+        io.sup.trip(Cause::WatchdogReset);
+        Err(Cause::WatchdogReset)
     } else {
         io.sup.arm(&inputs)
     };

@@ -142,3 +142,15 @@ fn sixteen_bit_counts_extend_across_wraps_both_ways() {
     assert_eq!(extend_count(0, 32_768), -32_768);
     assert_eq!(extend_count(100_000, (100_000u32 - 30_000) as u16), 70_000);
 }
+
+#[test]
+fn a_watchdog_reset_latches_before_arming() {
+    let mut s = Supervisor::new();
+    s.trip(Cause::WatchdogReset);
+    assert_eq!(s.state(), State::Safe(Cause::WatchdogReset));
+    assert_eq!(
+        s.check(&Inputs::default(), 0),
+        State::Safe(Cause::WatchdogReset)
+    );
+    assert_eq!(s.outputs([5.0; 3]), SAFE_OUTPUTS);
+}

@@ -33,6 +33,9 @@ pub enum Cause {
     /// The loop missed more than [`Supervisor::MAX_MISSED`] periods in a row: its commands
     /// are stale.
     Overrun,
+    /// The last reset came from the independent watchdog (the loop hung): the board stays
+    /// safe until power-cycled.
+    WatchdogReset,
 }
 
 /// The safety inputs sampled at a tick, each `true` when active (tripped). On the board the
@@ -159,10 +162,10 @@ impl Supervisor {
         self.state
     }
 
-    /// Forces the safe state with `cause` (a fault path outside the inputs); keeps an
-    /// earlier latched cause.
+    /// Forces the safe state with `cause` (a fault path outside the inputs); replaces
+    /// [`Cause::PowerOn`], keeps any other latched cause.
     pub fn trip(&mut self, cause: Cause) {
-        if self.state == State::Run {
+        if self.state == State::Run || self.state == State::Safe(Cause::PowerOn) {
             self.state = State::Safe(cause);
         }
     }
