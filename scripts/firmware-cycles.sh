@@ -82,4 +82,4 @@ awk -v mhz="$MHZ" -v per="$PERIOD_US" '
 
 echo
 echo "== Instruction mix of the whole run (executed)"
-grep '^MIX' "$OUT/cycles.txt" | awk '{ s += $3; a[$2] = $3; o[++n] = $2 } END { for (i = 1; i <= n; i++) printf "%-14s %12d %5.1f %%\n", o[i], a[o[i]], 100 * a[o[i]] / s }'
+grep '^MIX' "$OUT/cycles.txt" | awk '{ s += $3; a[$2] = $3; o[++n] = $2 } END { for (i = 1; i <= n; i++) printf "%-14s %14.0f %5.1f %%\n", o[i], a[o[i]], 100 * a[o[i]] / s }'
