@@ -262,6 +262,56 @@ fn bench_period<R: Real>(tag: &str, cfg: &LoopConfig, periods: u32, out: &mut Ou
     true
 }
 
+/// The board's encoder path around an `Io`: the counts are latched when the period starts
+/// (in `wait`, as the STM32 board's timer interrupt latches its counters at the tick) and
+/// `read` returns the latch. Same counts, same bits; the simulated encoders' arithmetic (a
+/// register read on hardware) then falls outside the measured period.
+struct Latched<I: crane_twin::logic::control::Io> {
+    inner: I,
+    counts: [Result<i32, crane_twin::logic::control::IoError>; 5],
+}
+
+impl<I: crane_twin::logic::control::Io> crane_twin::logic::control::Io for Latched<I> {
+    fn read(&mut self) -> [Result<i32, crane_twin::logic::control::IoError>; 5] {
+        self.counts
+    }
+    fn write(&mut self, u: [f64; 3]) -> Result<[f64; 3], crane_twin::logic::control::IoError> {
+        self.inner.write(u)
+    }
+    fn wait(&mut self) {
+        self.inner.wait();
+        self.counts = self.inner.read();
+    }
+}
+
+/// [`bench_period`] with the encoders latched at the tick ([`Latched`]), as on the STM32
+/// board: what a board's period costs.
+#[inline(never)]
+fn bench_period_latched<R: Real>(tag: &str, cfg: &LoopConfig, periods: u32, out: &mut Out) -> bool {
+    let cfg = *cfg;
+    let Ok(plant) = demo_plant() else {
+        return false;
+    };
+    let bus = SimBus::new(plant);
+    let mut inner = bus.io();
+    let counts = crane_twin::logic::control::Io::read(&mut inner);
+    let mut io = Latched { inner, counts };
+    let Ok(mut ctrl) = Controller::<R>::new(&Params::default(), demo_twin_init(), &cfg) else {
+        return false;
+    };
+    let _ = writeln!(out, "BENCH period_{tag}_latched {periods}");
+    for k in 0..periods {
+        let t = f64::from(k) * cfg.period;
+        bench_start();
+        let r = DEMO.at::<R>(t);
+        let p = ctrl.run_period(&mut io, &r);
+        bench_stop();
+        core::hint::black_box(p.command);
+        crane_twin::logic::control::Io::wait(&mut io);
+    }
+    true
+}
+
 #[entry]
 fn main() -> ! {
     let mut out = Out::new();
@@ -299,6 +349,8 @@ fn main() -> ! {
     let w = paint_stack();
     ok &= bench_period::<F32x>("f32x", &default, 4000, &mut out);
     let _ = writeln!(out, "STACK period_f32x {}", stack_used(w));
+    ok &= bench_period_latched::<F32x>("f32x", &default, 4000, &mut out);
+    ok &= bench_period_latched::<f64>("f64", &f64_loop(), 4000, &mut out);
     for sc in [&SCENARIOS[1], &SCENARIOS[3]] {
         ok &= bench_model::<f64>("f64", sc, MAX_SEGMENTS, &mut out);
         ok &= bench_model::<f64>("f64_budget1", sc, 1, &mut out);

@@ -7,6 +7,8 @@
 //!   ([`logic::plant`]) and the bit-exact cross-check scenarios ([`logic::scenarios`]);
 //! - [`hal`]: the hardware boundary on embedded-hal 1.0 (`SetDutyCycle` + two `OutputPin`s
 //!   per H-bridge, an [`hal::Encoder`] trait of our own, a period ticker);
+//! - [`preload`]: PWM channels whose zero duty takes effect at once on a timer with preloaded
+//!   compare registers (a direction change happens with the bridge really off);
 //! - [`board`]: the QEMU "board": the embedded-hal pins and encoders are backed by the model.
 
 #![no_std]
@@ -17,3 +19,4 @@
 pub mod board;
 pub mod hal;
 pub mod logic;
+pub mod preload;

@@ -17,4 +17,5 @@ pub mod io;
 pub mod observer;
 pub mod plant;
 pub mod prng;
+pub mod safety;
 pub mod scenarios;

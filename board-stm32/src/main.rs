@@ -1,0 +1,310 @@
+//! The crane twin on an STM32F405/407 at 168 MHz beside the motor drivers (issue 14).
+//!
+//! - Clock (`rcc` feature, part of `board`): flash 5 wait states with prefetch and the ART
+//!   caches set first, then HSE 8 MHz -> PLL -> 168 MHz (APB1 42 MHz, APB2 84 MHz) through
+//!   `stm32f4xx-hal`. QEMU `netduinoplus2` has no RCC model (its registers read 0, so the HAL
+//!   would wait for `HSERDY` forever): the default (QEMU) build leaves it out and runs on the
+//!   reset clock.
+//! - A timer interrupt every 2 ms (TIM7 on the board, TIM5 under QEMU) latches the encoder
+//!   counters and releases the period; the loop counts overruns ([`TickLatch`], `u64`).
+//! - The twin is `F32x` (f32 with FPU-only sine/cosine); f64 stays the offline reference.
+//! - Safety: [`Supervisor`] (e-stop, limit switches, driver fault, overruns) gates every
+//!   command; the panic and HardFault handlers call [`regs::force_safe`] before anything
+//!   else; the independent watchdog (about 10 ms) is fed once per period; DBGMCU freezes the
+//!   timers while a debugger halts the core.
+//! - Log: text lines over USART2 (115200 8N1); with `probe`, also defmt over RTT.
+//!
+//! The default build is the QEMU one: the plant is the model itself (`SimPlant`), the PWM
+//! duties are mirrored into TIM3's compare registers, and the run ends with a forced panic
+//! (or, with the semihosting argument `hardfault` or `estop`, with those paths) so the host
+//! tests `host-tests/tests/stm32_board.rs` can check the safe state.
+#![no_std]
+#![no_main]
+
+#[cfg(feature = "board")]
+mod board;
+#[cfg(not(feature = "board"))]
+mod sim;
+
+use board_stm32::regs;
+use core::cell::RefCell;
+use core::fmt::Write;
+use core::panic::PanicInfo;
+use cortex_m::interrupt::Mutex;
+use cortex_m_rt::{entry, exception, ExceptionFrame};
+use crane_twin::logic::safety::TickLatch;
+#[cfg(feature = "probe")]
+use defmt_rtt as _;
+use stm32f4xx_hal::pac::{self, interrupt};
+use stm32f4xx_hal::prelude::*;
+
+/// The period clock shared with the timer interrupt.
+static TICKS: Mutex<RefCell<TickLatch>> = Mutex::new(RefCell::new(TickLatch::new()));
+/// Encoder counters latched at the last tick (board).
+static LATCHED: Mutex<RefCell<[u16; 5]>> = Mutex::new(RefCell::new([0; 5]));
+
+/// Control period [us].
+pub const PERIOD_US: u32 = 2_000;
+
+/// Waits (WFI) for the next tick; returns the periods missed since the previous one taken.
+pub fn wait_tick() -> u64 {
+    loop {
+        let t = cortex_m::interrupt::free(|cs| TICKS.borrow(cs).borrow_mut().take());
+        if let Some(missed) = t {
+            return missed;
+        }
+        cortex_m::asm::wfi();
+    }
+}
+
+/// Ticks and overruns so far.
+pub fn tick_counts() -> (u64, u64) {
+    cortex_m::interrupt::free(|cs| {
+        let t = TICKS.borrow(cs).borrow();
+        (t.ticks(), t.overruns())
+    })
+}
+
+/// Encoder counters latched at the last tick.
+pub fn latched_counts() -> [u16; 5] {
+    cortex_m::interrupt::free(|cs| *LATCHED.borrow(cs).borrow())
+}
+
+/// The period interrupt: latch the encoders, count the tick.
+fn on_period_interrupt() {
+    if regs::ack_period_timer() {
+        #[cfg(feature = "board")]
+        let counts = regs::encoder_counts();
+        cortex_m::interrupt::free(|cs| {
+            #[cfg(feature = "board")]
+            {
+                *LATCHED.borrow(cs).borrow_mut() = counts;
+            }
+            TICKS.borrow(cs).borrow_mut().on_tick();
+        });
+    }
+}
+
+#[cfg(feature = "board")]
+#[interrupt]
+fn TIM7() {
+    on_period_interrupt();
+}
+
+#[cfg(not(feature = "board"))]
+#[interrupt]
+fn TIM5() {
+    on_period_interrupt();
+}
+
+/// The period timer's interrupt line of this build.
+#[cfg(feature = "board")]
+const PERIOD_IRQ: pac::Interrupt = pac::Interrupt::TIM7;
+#[cfg(not(feature = "board"))]
+const PERIOD_IRQ: pac::Interrupt = pac::Interrupt::TIM5;
+
+/// The log line: USART2 through the HAL; with `probe` each line also as a defmt frame.
+pub struct Log<W: Write> {
+    uart: W,
+    #[cfg(feature = "probe")]
+    line: LineBuf,
+}
+
+impl<W: Write> Log<W> {
+    fn new(uart: W) -> Self {
+        Log {
+            uart,
+            #[cfg(feature = "probe")]
+            line: LineBuf::new(),
+        }
+    }
+}
+
+impl<W: Write> Write for Log<W> {
+    fn write_str(&mut self, s: &str) -> core::fmt::Result {
+        #[cfg(feature = "probe")]
+        for part in s.split_inclusive('\n') {
+            let _ = self.line.write_str(part);
+            if part.ends_with('\n') || self.line.len == self.line.buf.len() {
+                defmt::println!("{=[u8]:a}", self.line.as_bytes());
+                self.line.len = 0;
+            }
+        }
+        self.uart.write_str(s)
+    }
+}
+
+#[entry]
+fn main() -> ! {
+    // Outputs are off at reset (timers disabled, GPIO inputs): nothing to undo first.
+    let (Some(dp), Some(mut cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
+        fault_stop(b"PANIC peripherals taken twice\r\n");
+    };
+    // Reset cause (RCC_CSR): after a watchdog reset the supervisor is not armed again.
+    let csr = dp.RCC.csr().read().bits();
+    let watchdog_reset = csr & (1 << 29) != 0;
+    dp.RCC.csr().modify(|_, w| w.rmvf().set_bit());
+    #[cfg(feature = "rcc")]
+    let mut rcc = {
+        // Flash latency and the ART accelerator first, before the clock goes up.
+        dp.FLASH.acr().modify(|_, w| unsafe {
+            w.latency().bits(5);
+            w.prften().set_bit();
+            w.icen().set_bit();
+            w.dcen().set_bit()
+        });
+        dp.RCC.freeze(
+            stm32f4xx_hal::rcc::Config::hse(8.MHz())
+                .sysclk(168.MHz())
+                .hclk(168.MHz())
+                .pclk1(42.MHz())
+                .pclk2(84.MHz()),
+        )
+    };
+    #[cfg(not(feature = "rcc"))]
+    let mut rcc = dp.RCC.constrain();
+
+    regs::freeze_timers_in_debug();
+    let gpioa = dp.GPIOA.split(&mut rcc);
+    let Ok(tx) = dp.USART2.tx(gpioa.pa2, 115_200.bps(), &mut rcc) else {
+        fault_stop(b"PANIC usart\r\n");
+    };
+    let mut log = Log::new(tx);
+    let _ = writeln!(
+        log,
+        "\r\nBOARD crane-twin {} sysclk={} Hz",
+        env!("CARGO_PKG_VERSION"),
+        rcc.clocks.sysclk().raw()
+    );
+    let _ = writeln!(log, "RESET csr={csr:08x} watchdog={watchdog_reset}");
+
+    let mut wdg = stm32f4xx_hal::watchdog::IndependentWatchdog::new(dp.IWDG);
+    wdg.start(10.millis());
+
+    #[cfg(feature = "board")]
+    let code = board::run(board::Parts {
+        gpioa: board::GpioA {
+            pa0: gpioa.pa0,
+            pa1: gpioa.pa1,
+            pa6: gpioa.pa6,
+            pa7: gpioa.pa7,
+            pa8: gpioa.pa8,
+            pa9: gpioa.pa9,
+            pa10: gpioa.pa10,
+            pa15: gpioa.pa15,
+        },
+        gpiob: dp.GPIOB.split(&mut rcc),
+        gpioc: dp.GPIOC.split(&mut rcc),
+        tim1: dp.TIM1,
+        tim2: dp.TIM2,
+        tim3: dp.TIM3,
+        tim4: dp.TIM4,
+        tim5: dp.TIM5,
+        tim7: dp.TIM7,
+        tim8: dp.TIM8,
+        rcc: &mut rcc,
+        nvic: &mut cp.NVIC,
+        wdg: &mut wdg,
+        watchdog_reset,
+        log: &mut log,
+    });
+    #[cfg(not(feature = "board"))]
+    let code = {
+        let _ = (watchdog_reset, &mut cp);
+        sim::run(&mut rcc, &mut wdg, &mut log)
+    };
+    let _ = writeln!(log, "DONE {code}");
+    #[cfg(not(feature = "board"))]
+    sim::exit(code);
+    #[allow(unreachable_code)]
+    loop {
+        // The board never leaves `board::run`; keep the watchdog fed only while the loop runs.
+        cortex_m::asm::wfi();
+    }
+}
+
+/// Starts the 2 ms period interrupt.
+pub fn start_ticks(nvic: &mut cortex_m::peripheral::NVIC) {
+    regs::start_period_timer(PERIOD_US);
+    // SAFETY: the handler only touches the tick latch and the period timer, both ready.
+    unsafe {
+        nvic.set_priority(PERIOD_IRQ, 0x40);
+        cortex_m::peripheral::NVIC::unmask(PERIOD_IRQ);
+    }
+}
+
+/// Safe state, a message on the raw USART, then stop (QEMU: exit with failure; board: wait
+/// for the watchdog, whose reset keeps the supervisor safe).
+fn fault_stop(msg: &[u8]) -> ! {
+    regs::force_safe();
+    regs::usart_write_raw(msg);
+    report_safe_state();
+    #[cfg(not(feature = "board"))]
+    sim::exit(1);
+    #[allow(unreachable_code)]
+    loop {
+        cortex_m::asm::nop();
+    }
+}
+
+/// Writes the PWM registers as read back after the safe state.
+fn report_safe_state() {
+    let (ccr, ccer) = regs::pwm_readback();
+    let mut line = LineBuf::new();
+    let _ = writeln!(
+        line,
+        "SAFE ccr={},{},{} ccer={:x}\r",
+        ccr[0], ccr[1], ccr[2], ccer
+    );
+    regs::usart_write_raw(line.as_bytes());
+}
+
+/// A fixed buffer for a line formatted in a fault handler.
+struct LineBuf {
+    buf: [u8; 96],
+    len: usize,
+}
+
+impl LineBuf {
+    fn new() -> Self {
+        LineBuf {
+            buf: [0; 96],
+            len: 0,
+        }
+    }
+    fn as_bytes(&self) -> &[u8] {
+        self.buf.get(..self.len).unwrap_or(&[])
+    }
+}
+
+impl Write for LineBuf {
+    fn write_str(&mut self, s: &str) -> core::fmt::Result {
+        for &b in s.as_bytes() {
+            if let Some(slot) = self.buf.get_mut(self.len) {
+                *slot = b;
+                self.len += 1;
+            }
+        }
+        Ok(())
+    }
+}
+
+#[panic_handler]
+fn panic(info: &PanicInfo) -> ! {
+    // Outputs off and driver disabled before anything else (formatting could fault).
+    regs::force_safe();
+    cortex_m::interrupt::disable();
+    let mut line = LineBuf::new();
+    let _ = writeln!(line, "PANIC {}\r", info.message());
+    regs::usart_write_raw(line.as_bytes());
+    #[cfg(feature = "probe")]
+    defmt::error!("panic: safe state");
+    fault_stop(b"")
+}
+
+#[exception]
+unsafe fn HardFault(_frame: &ExceptionFrame) -> ! {
+    regs::force_safe();
+    regs::usart_write_raw(b"HARDFAULT\r\n");
+    fault_stop(b"")
+}

@@ -1,0 +1,202 @@
+//! Register-level pieces that must work without the HAL's objects: the fault handlers' safe
+//! state (they cannot own the HAL's PWM or pins), the PWM compare writes with their update
+//! event, the 2 ms period timer and the encoder counters read in its interrupt. Addresses and
+//! offsets from RM0090 (STM32F405/407 reference manual), the same on every STM32F4 timer.
+//!
+//! Which timer does what:
+//!
+//! | role | board (`--features board`) | QEMU `netduinoplus2` (default build) |
+//! |---|---|---|
+//! | H-bridge PWM, 3 channels, 40 kHz | TIM1 (advanced: `BDTR.MOE`) | TIM3 (QEMU models TIM2-5 only) |
+//! | 2 ms control period interrupt | TIM7 (basic timer, 84 MHz) | TIM5 (QEMU's timers count at 1 GHz) |
+//! | encoders x, y, L, alpha, beta | TIM2, TIM3, TIM4, TIM5, TIM8 (encoder mode) | simulated plant |
+
+use core::ptr::{read_volatile, write_volatile};
+use crane_twin::logic::io::PWM_MAX;
+use crane_twin::preload::PreloadedTimer;
+
+/// TIM1 (APB2).
+pub const TIM1: usize = 0x4001_0000;
+/// TIM2 (APB1).
+pub const TIM2: usize = 0x4000_0000;
+/// TIM3 (APB1).
+pub const TIM3: usize = 0x4000_0400;
+/// TIM4 (APB1).
+pub const TIM4: usize = 0x4000_0800;
+/// TIM5 (APB1).
+pub const TIM5: usize = 0x4000_0C00;
+/// TIM7 (APB1).
+pub const TIM7: usize = 0x4000_1400;
+/// TIM8 (APB2).
+pub const TIM8: usize = 0x4001_0400;
+/// USART2 (the log line; QEMU's second serial port).
+pub const USART2: usize = 0x4000_4400;
+/// DBGMCU APB1 freeze register.
+pub const DBGMCU_APB1_FZ: usize = 0xE004_2008;
+/// DBGMCU APB2 freeze register.
+pub const DBGMCU_APB2_FZ: usize = 0xE004_200C;
+/// GPIOC (driver enable PC8, brake release PC13, direction pins PC0-PC5).
+pub const GPIOC: usize = 0x4002_0800;
+
+// Timer register offsets.
+const CR1: usize = 0x00;
+const DIER: usize = 0x0C;
+const SR: usize = 0x10;
+const EGR: usize = 0x14;
+const CCMR1: usize = 0x18;
+const CCMR2: usize = 0x1C;
+const CCER: usize = 0x20;
+const CNT: usize = 0x24;
+const PSC: usize = 0x28;
+const ARR: usize = 0x2C;
+const CCR1: usize = 0x34;
+const BDTR: usize = 0x44;
+
+/// The PWM timer of this build.
+#[cfg(feature = "board")]
+pub const PWM_TIM: usize = TIM1;
+/// The PWM timer of this build.
+#[cfg(not(feature = "board"))]
+pub const PWM_TIM: usize = TIM3;
+/// The period timer of this build.
+#[cfg(feature = "board")]
+pub const PERIOD_TIM: usize = TIM7;
+/// The period timer of this build.
+#[cfg(not(feature = "board"))]
+pub const PERIOD_TIM: usize = TIM5;
+/// Clock of the period timer [Hz]: APB1 timers at 2 x 42 MHz on the board; QEMU's STM32F2xx
+/// timer model counts at a fixed 1 GHz (`clock-frequency` of its SoC), whatever RCC says.
+#[cfg(feature = "board")]
+pub const PERIOD_TIM_HZ: u32 = 84_000_000;
+/// Clock of the period timer [Hz] (see the board variant).
+#[cfg(not(feature = "board"))]
+pub const PERIOD_TIM_HZ: u32 = 1_000_000_000;
+/// Encoder counters x, y, L, alpha, beta (board only).
+pub const ENCODER_TIMS: [usize; 5] = [TIM2, TIM3, TIM4, TIM5, TIM8];
+
+fn wr(addr: usize, v: u32) {
+    // SAFETY: callers pass a peripheral register address of this chip (constants above plus
+    // RM0090 offsets); a 32-bit volatile store has no other effect on memory.
+    unsafe { write_volatile(addr as *mut u32, v) }
+}
+
+fn rd(addr: usize) -> u32 {
+    // SAFETY: as in `wr`, a volatile load of a peripheral register.
+    unsafe { read_volatile(addr as *const u32) }
+}
+
+/// The safe state, first thing of the panic and HardFault handlers and of a supervisor trip:
+/// main output off (TIM1 `BDTR.MOE`), compare registers 0 made effective by an update event,
+/// channel outputs disabled, driver enable low, hoist brake applied. Uses no HAL object, no
+/// stack beyond its frame, no lock; idempotent.
+pub fn force_safe() {
+    #[cfg(feature = "board")]
+    wr(PWM_TIM + BDTR, 0);
+    for ch in 0..3 {
+        wr(PWM_TIM + CCR1 + 4 * ch, 0);
+    }
+    wr(PWM_TIM + EGR, 1);
+    wr(PWM_TIM + CCER, 0);
+    // BSRR upper half resets: PC8 (driver enable), PC13 (brake release), PC0-PC5 (IN1/IN2).
+    #[cfg(feature = "board")]
+    wr(GPIOC + 0x18, ((1 << 8) | (1 << 13) | 0x3F) << 16);
+}
+
+/// The PWM compare registers CCR1-CCR3 and CCER as read back (for the QEMU checks).
+pub fn pwm_readback() -> ([u32; 3], u32) {
+    (
+        [
+            rd(PWM_TIM + CCR1),
+            rd(PWM_TIM + CCR1 + 4),
+            rd(PWM_TIM + CCR1 + 8),
+        ],
+        rd(PWM_TIM + CCER),
+    )
+}
+
+/// The three-channel PWM timer: PWM mode 1, preloaded compares and auto-reload, full scale
+/// [`PWM_MAX`] ticks (40 kHz at 168 MHz, no prescaler). On the board the HAL has enabled its
+/// clock and routed the pins first.
+#[derive(Debug)]
+pub struct PwmTimer(());
+
+impl PwmTimer {
+    /// Configures and starts the PWM timer with every compare at 0.
+    pub fn init() -> Self {
+        let oc_pwm1_preload = (0b110 << 4) | (1 << 3);
+        wr(PWM_TIM + CR1, 0);
+        wr(PWM_TIM + PSC, 0);
+        wr(PWM_TIM + ARR, u32::from(PWM_MAX) - 1);
+        wr(PWM_TIM + CCMR1, oc_pwm1_preload | (oc_pwm1_preload << 8));
+        wr(PWM_TIM + CCMR2, oc_pwm1_preload);
+        for ch in 0..3 {
+            wr(PWM_TIM + CCR1 + 4 * ch, 0);
+        }
+        wr(PWM_TIM + EGR, 1);
+        wr(PWM_TIM + CCER, 1 | (1 << 4) | (1 << 8));
+        #[cfg(feature = "board")]
+        wr(PWM_TIM + BDTR, 1 << 15);
+        // ARPE | CEN
+        wr(PWM_TIM + CR1, (1 << 7) | 1);
+        PwmTimer(())
+    }
+}
+
+impl PreloadedTimer for PwmTimer {
+    fn max_compare(&self) -> u16 {
+        PWM_MAX
+    }
+    fn set_compare(&mut self, ch: usize, value: u16) {
+        if ch < 3 {
+            wr(PWM_TIM + CCR1 + 4 * ch, u32::from(value));
+        }
+    }
+    fn force_update(&mut self) {
+        wr(PWM_TIM + EGR, 1);
+    }
+}
+
+/// Starts the period timer: an update interrupt every `period_us` microseconds.
+pub fn start_period_timer(period_us: u32) {
+    wr(PERIOD_TIM + CR1, 0);
+    wr(PERIOD_TIM + PSC, PERIOD_TIM_HZ / 1_000_000 - 1);
+    wr(PERIOD_TIM + ARR, period_us - 1);
+    wr(PERIOD_TIM + EGR, 1);
+    wr(PERIOD_TIM + SR, 0);
+    wr(PERIOD_TIM + DIER, 1);
+    wr(PERIOD_TIM + CR1, 1);
+}
+
+/// Acknowledges the period timer's update interrupt; `true` if it was pending.
+pub fn ack_period_timer() -> bool {
+    let pending = rd(PERIOD_TIM + SR) & 1 != 0;
+    wr(PERIOD_TIM + SR, 0);
+    pending
+}
+
+/// The five encoder counters' low 16 bits (board; extended to `i32` by the loop).
+pub fn encoder_counts() -> [u16; 5] {
+    ENCODER_TIMS.map(|t| rd(t + CNT) as u16)
+}
+
+/// Freezes every timer and the watchdog while a debugger halts the core (DBGMCU): the PWM
+/// timer TIM1 then also disables its outputs (RM0090 32.16: as after a break event), the
+/// period timer stops ticking and the watchdog does not reset a halted core.
+pub fn freeze_timers_in_debug() {
+    // APB1: TIM2..TIM7 (bits 0-5), IWDG (bit 12).
+    wr(DBGMCU_APB1_FZ, rd(DBGMCU_APB1_FZ) | 0x3F | (1 << 12));
+    // APB2: TIM1 (bit 0), TIM8 (bit 1).
+    wr(DBGMCU_APB2_FZ, rd(DBGMCU_APB2_FZ) | 0b11);
+}
+
+/// Blocking write of bytes to the log USART from a fault handler (no HAL object). Bounded:
+/// gives up on a byte after 100,000 polls of `TXE`.
+pub fn usart_write_raw(bytes: &[u8]) {
+    for &b in bytes {
+        let mut n = 0u32;
+        while rd(USART2) & (1 << 7) == 0 && n < 100_000 {
+            n += 1;
+        }
+        wr(USART2 + 4, u32::from(b));
+    }
+}

@@ -1,0 +1,233 @@
+//! The STM32F405 board firmware (`board-stm32`, default build) under QEMU `netduinoplus2`
+//! against the host, and its safety paths.
+//!
+//! The firmware runs the `F32x` twin's closed loop on the simulated rig, each period released
+//! by the TIM5 update interrupt, and prints over USART2 (QEMU's second serial port, here the
+//! test's stdout) the same `LBEGIN`/`L`/`LEND`/`LSTAT` lines as `run_demo` on the host. QEMU
+//! runs with `-icount shift=0,sleep=off` (1 ns per instruction, idle time skipped): the run is
+//! deterministic and its virtual 2 ms periods are exact, so the tick and overrun counts are
+//! too. Each run ends through a fault path, selected by the semihosting argument:
+//! a forced panic (default), a HardFault (`hardfault`) or the e-stop input (`estop`); the
+//! firmware reads TIM3's compare registers back (QEMU models TIM2-5; the board's TIM1 is
+//! written the same way) and prints them.
+//!
+//! Run by `scripts/test.sh` after `cargo build -p board-stm32 --target thumbv7em-none-eabihf
+//! --release`; `BOARD_ELF` overrides the ELF's path.
+
+// crane-twin's `defmt` feature (derives only) does not exist in this crate.
+#![allow(unexpected_cfgs)]
+
+#[allow(dead_code, clippy::all)]
+#[path = "../../twin/src/logic/mod.rs"]
+mod logic;
+
+use logic::fastmath::F32x;
+use logic::plant::{demo_plant, run_demo};
+use std::io::Read;
+use std::path::PathBuf;
+use std::process::{Command, ExitStatus, Stdio};
+use std::time::{Duration, Instant};
+
+fn workspace_root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("host-tests sits in the workspace")
+        .to_path_buf()
+}
+
+fn board_elf() -> PathBuf {
+    let elf = std::env::var_os("BOARD_ELF")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            let target = std::env::var_os("CARGO_TARGET_DIR")
+                .map(|d| workspace_root().join(d))
+                .unwrap_or_else(|| workspace_root().join("target"));
+            target.join("thumbv7em-none-eabihf/release/board-stm32")
+        });
+    assert!(
+        elf.is_file(),
+        "board ELF not found at {}: build it first with \
+         `cargo build -p board-stm32 --target thumbv7em-none-eabihf --release` \
+         (the default features: the QEMU build; or point BOARD_ELF at it)",
+        elf.display()
+    );
+    elf
+}
+
+/// Runs the board ELF under QEMU netduinoplus2 with semihosting argument `arg`; returns the
+/// exit status and USART2's output.
+fn run_board(arg: &str) -> (ExitStatus, String) {
+    let elf = board_elf();
+    let deadline = Duration::from_secs(240);
+    let mut child = Command::new("qemu-system-arm")
+        .args([
+            "-machine",
+            "netduinoplus2",
+            "-display",
+            "none",
+            "-monitor",
+            "none",
+            "-serial",
+            "null",
+            "-serial",
+            "stdio",
+            "-icount",
+            "shift=0,sleep=off",
+            "-semihosting-config",
+        ])
+        .arg(format!("enable=on,target=native,arg=board-stm32,arg={arg}"))
+        .arg("-kernel")
+        .arg(&elf)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap_or_else(|e| panic!("cannot start qemu-system-arm ({e}); install it with `apt-get install -y --no-install-recommends qemu-system-arm`"));
+    let mut stdout = child.stdout.take().expect("piped stdout");
+    let mut stderr = child.stderr.take().expect("piped stderr");
+    let reader = std::thread::spawn(move || {
+        let mut s = Vec::new();
+        stdout.read_to_end(&mut s).map(|_| s)
+    });
+    let err_reader = std::thread::spawn(move || {
+        let mut s = String::new();
+        let _ = stderr.read_to_string(&mut s);
+        s
+    });
+    let start = Instant::now();
+    let status = loop {
+        if let Some(st) = child.try_wait().expect("wait for qemu") {
+            break st;
+        }
+        if start.elapsed() > deadline {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("QEMU did not finish within {deadline:?}");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    let bytes = reader.join().expect("reader").expect("read stdout");
+    let err = err_reader.join().unwrap_or_default();
+    let text = String::from_utf8_lossy(&bytes).replace('\r', "");
+    assert!(
+        !text.is_empty(),
+        "no USART output (exit {status})\n--- stderr ---\n{err}"
+    );
+    (status, text)
+}
+
+/// The host's transcript of the `F32x` demonstration loop (what the firmware prints).
+fn host_loop() -> String {
+    let mut plant = demo_plant().expect("demo plant");
+    let mut out = String::new();
+    run_demo::<F32x, _, _>(&mut plant, "f32x", &mut out).expect("format");
+    out
+}
+
+fn loop_lines(text: &str) -> Vec<&str> {
+    text.lines()
+        .filter(|l| {
+            ["LBEGIN ", "L ", "LEND ", "LSTAT "]
+                .iter()
+                .any(|k| l.starts_with(k))
+        })
+        .collect()
+}
+
+/// The value of `key=` in the first line starting with `prefix`.
+fn field<'a>(text: &'a str, prefix: &str, key: &str) -> &'a str {
+    let line = text
+        .lines()
+        .find(|l| l.starts_with(prefix))
+        .unwrap_or_else(|| panic!("no `{prefix}` line in:\n{text}"));
+    let at = line
+        .find(&format!("{key}="))
+        .unwrap_or_else(|| panic!("no `{key}=` in `{line}`"));
+    line[at + key.len() + 1..]
+        .split_whitespace()
+        .next()
+        .unwrap_or("")
+}
+
+fn ccr(text: &str, prefix: &str) -> [u32; 3] {
+    let v: Vec<u32> = field(text, prefix, "ccr")
+        .split(',')
+        .map(|x| x.parse().expect("ccr value"))
+        .collect();
+    [v[0], v[1], v[2]]
+}
+
+#[test]
+#[ignore = "needs qemu-system-arm and the board ELF; run by scripts/test.sh"]
+fn stm32_trajectory_matches_host_and_a_forced_panic_zeroes_the_pwm() {
+    let (status, fw) = run_board("panic");
+    // 1. the twin's trajectory over the UART, bit for bit
+    let host = host_loop();
+    let (a, b) = (loop_lines(&fw), loop_lines(&host));
+    assert_eq!(a.len(), b.len(), "loop transcript lengths differ:\n{fw}");
+    for (i, (f, h)) in a.iter().zip(b.iter()).enumerate() {
+        assert_eq!(f, h, "line {i} differs (board left, host right)");
+    }
+    assert_eq!(a.iter().filter(|l| l.starts_with("L ")).count(), 16);
+    // 2. the timer interrupt drove every period, none overran (deterministic under icount)
+    assert_eq!(field(&fw, "TICKS ", "periods"), "4000");
+    assert_eq!(field(&fw, "TICKS ", "ticks"), "4000");
+    assert_eq!(field(&fw, "TICKS ", "overruns"), "0");
+    assert!(fw.contains("SUPERVISOR Run"), "{fw}");
+    // 3. the forced panic: PWM running before, compare registers and outputs 0 after
+    let before = ccr(&fw, "BEFORE ");
+    assert!(
+        before.iter().any(|&c| c > 0),
+        "PWM idle before the panic: {before:?}"
+    );
+    assert!(fw.contains("PANIC forced for the test"), "{fw}");
+    assert_eq!(ccr(&fw, "SAFE "), [0, 0, 0]);
+    assert_eq!(field(&fw, "SAFE ", "ccer"), "0");
+    assert!(!status.success(), "a panic exits with failure");
+}
+
+#[test]
+#[ignore = "needs qemu-system-arm and the board ELF; run by scripts/test.sh"]
+fn stm32_hardfault_zeroes_the_pwm() {
+    let (status, fw) = run_board("hardfault");
+    assert!(fw.contains("MODE HardFault"), "{fw}");
+    let before = ccr(&fw, "BEFORE ");
+    assert!(
+        before.iter().all(|&c| c > 0),
+        "PWM not driven before: {before:?}"
+    );
+    assert!(fw.contains("HARDFAULT"), "{fw}");
+    assert_eq!(ccr(&fw, "SAFE "), [0, 0, 0]);
+    assert_eq!(field(&fw, "SAFE ", "ccer"), "0");
+    assert!(!status.success());
+}
+
+#[test]
+#[ignore = "needs qemu-system-arm and the board ELF; run by scripts/test.sh"]
+fn stm32_estop_forces_the_safe_state() {
+    let (status, fw) = run_board("estop");
+    assert!(fw.contains("MODE EStop"), "{fw}");
+    // the loop ran normally up to the e-stop (period 1000): its lines equal the host's
+    let host = host_loop();
+    let (a, b) = (loop_lines(&fw), loop_lines(&host));
+    for k in [0, 250, 500, 750, 1000] {
+        let tag = format!("L {k} ");
+        let f = a.iter().find(|l| l.starts_with(&tag)).expect("board line");
+        let h = b.iter().find(|l| l.starts_with(&tag)).expect("host line");
+        assert_eq!(f, h, "period {k}");
+    }
+    // after it the twin sees no drive (0 V applied): the trajectories part
+    let f = a
+        .iter()
+        .find(|l| l.starts_with("L 1250 "))
+        .expect("board line");
+    let h = b
+        .iter()
+        .find(|l| l.starts_with("L 1250 "))
+        .expect("host line");
+    assert_ne!(f, h, "the e-stop changed nothing");
+    assert!(fw.contains("SUPERVISOR Safe(EStop)"), "{fw}");
+    assert_eq!(ccr(&fw, "BEFORE "), [0, 0, 0]);
+    assert_eq!(field(&fw, "BEFORE ", "ccer"), "0");
+    assert!(status.success(), "the e-stop run ends normally:\n{fw}");
+}
