@@ -207,9 +207,10 @@ enum Command {
         /// Let the outputs replace an input or a file of a data set.
         #[arg(long)]
         force: bool,
-        /// Print the report (JSON) on stdout instead of the text summary.
-        #[arg(long)]
-        json: bool,
+        /// The report (JSON): `--json` prints it on stdout instead of the text summary (as
+        /// every command's `--json`); `--json FILE` writes it to FILE like `--report FILE`.
+        #[arg(long, value_name = "FILE", num_args = 0..=1)]
+        json: Option<Option<PathBuf>>,
     },
 }
 
@@ -295,16 +296,27 @@ fn run(command: Command) -> Result<()> {
             plots,
             force,
             json,
-        } => story::diagnose(
-            &dataset,
-            params.as_deref(),
-            fit_baseline,
-            symmetric,
-            report.as_deref(),
-            plots,
-            force,
-            json,
-        )?,
+        } => {
+            // `--json FILE` is `--report FILE`; a bare `--json` prints the report on stdout
+            let (json, report) = match json {
+                Some(Some(file)) if report.is_none() => (false, Some(file)),
+                Some(Some(_)) => {
+                    anyhow::bail!("give the report file once: `--json FILE` or `--report FILE`")
+                }
+                Some(None) => (true, report),
+                None => (false, report),
+            };
+            story::diagnose(
+                &dataset,
+                params.as_deref(),
+                fit_baseline,
+                symmetric,
+                report.as_deref(),
+                plots,
+                force,
+                json,
+            )?
+        }
     }
     Ok(())
 }

@@ -290,3 +290,36 @@ fn diagnose_json_is_one_document_on_stdout() {
         serde_json::from_slice(&std::fs::read(d.join("r.json")).unwrap()).unwrap();
     assert_eq!(v, file);
 }
+
+/// The command on the real CICESE arm data: `crane diagnose examples/cicese_joint1
+/// --json R --plots P` exits 0, writes the report to R (the `--json FILE` form of
+/// `--report FILE`) and the plots to P, and prints the text summary.
+#[test]
+fn diagnose_cicese_json_file_and_plots() {
+    if crane_ident::shared_data::require("cicese").is_none() {
+        return;
+    }
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    for joint in ["cicese_joint1", "cicese_joint2"] {
+        let example = root.join("examples").join(joint);
+        let d = tmp(joint);
+        let o = crane(
+            &d,
+            &[
+                "diagnose",
+                example.to_str().unwrap(),
+                "--json",
+                "R.json",
+                "--plots",
+                "P",
+            ],
+        );
+        assert!(o.status.success(), "{joint}: {}", stderr(&o));
+        let r: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(d.join("R.json")).unwrap()).unwrap();
+        assert!(r["final_model"]["breakaway_pos"].as_f64().unwrap() > 0.0);
+        assert!(r["heldout_simulation"]["runs"].as_array().unwrap().len() > 1);
+        assert!(d.join("P/force_velocity.svg").is_file());
+        assert!(String::from_utf8_lossy(&o.stdout).starts_with("verdict: "));
+    }
+}
