@@ -18,6 +18,7 @@
 
 #![forbid(unsafe_code)]
 
+pub mod adaptive_run;
 pub mod cases;
 pub mod figures;
 pub mod montecarlo;
