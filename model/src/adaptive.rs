@@ -16,8 +16,8 @@
 //!   position reaching the limit it moves towards are found on the dense output (sampled at
 //!   eight points of the step, then bisection), a stopped axis's breakaway by its margin at
 //!   the stage evaluations, then bisection on the margin evaluated at the dense state. All
-//!   are located to [`Tolerances::event`] seconds. The step is then redone from its start up
-//!   to the earliest event (a Dormand-Prince step of that length), the reset applied (the
+//!   are located to [`Tolerances::event`] seconds. The state at the earliest event is taken
+//!   from the dense output (where the event was located), the reset applied (the
 //!   resets of `NUMERICS.md`: velocity `qd := 0`, limit end-stop impulse), every other
 //!   violation swept, and the modes re-resolved there ([`crate::modes`]); the next step
 //!   starts from the event.
@@ -253,7 +253,10 @@ fn bisect(
 #[derive(Clone, Copy, Debug)]
 struct Dense {
     t0: f64,
+    /// Length of the trial step the stages belong to [s].
     h: f64,
+    /// End of the accepted part, as a fraction of `h` (1, or the event's fraction).
+    th_end: f64,
     y0: Y,
     k: [Y; 7],
 }
@@ -303,6 +306,8 @@ pub struct Adaptive {
     e1: Option<Eval<f64>>,
     h: f64,
     dense: Option<Dense>,
+    /// The modes the last accepted step was taken in (those of its dense output).
+    step_modes: [Mode; 3],
     stats: AdaptiveStats,
     rejected_last: bool,
 }
@@ -333,6 +338,7 @@ impl Adaptive {
             e1: None,
             h: 0.0,
             dense: None,
+            step_modes: modes0,
             stats: AdaptiveStats::default(),
             rejected_last: false,
         })
@@ -353,6 +359,12 @@ impl Adaptive {
         self.modes
     }
 
+    /// The modes the last accepted step was taken in: those of its dense output (the current
+    /// modes differ after an event).
+    pub fn step_modes(&self) -> [Mode; 3] {
+        self.step_modes
+    }
+
     /// Work done so far.
     pub fn stats(&self) -> AdaptiveStats {
         self.stats
@@ -363,7 +375,7 @@ impl Adaptive {
     pub fn dense(&self, t: f64) -> Option<State<f64>> {
         let d = self.dense.as_ref()?;
         let th = if d.h > 0.0 {
-            ((t - d.t0) / d.h).clamp(0.0, 1.0)
+            ((t - d.t0) / d.h).clamp(0.0, d.th_end)
         } else {
             0.0
         };
@@ -499,6 +511,7 @@ impl Adaptive {
         let d = Dense {
             t0: self.t,
             h,
+            th_end: 1.0,
             y0: pack(&self.y),
             k: tr.k,
         };
@@ -622,9 +635,10 @@ impl Adaptive {
             };
             self.rejected_last = false;
             self.stats.accepted += 1;
+            self.step_modes = self.modes;
             let event = self.find_event(h, &tr, u)?;
             let Some((th, kind, i)) = event else {
-                self.dense = Some(Dense { t0, h, y0, k: tr.k });
+                self.dense = Some(Dense { t0, h, th_end: 1.0, y0, k: tr.k });
                 self.t = if last { t_end } else { self.t + h };
                 self.y = unpack(&tr.yn);
                 self.e1 = Some(tr.evals[6]);
@@ -637,16 +651,19 @@ impl Adaptive {
                     event: None,
                 });
             };
-            // Redo the step from its start up to the event, then reset and re-resolve.
+            // The state at the event from the dense output (where the event was located), then
+            // the reset and the modes re-resolved; the next step starts there.
             let s = th * h;
-            let tr_e = self.trial(s, &e1, u)?;
-            self.dense = Some(Dense {
+            let d = Dense {
                 t0,
-                h: s,
+                h,
+                th_end: th,
                 y0,
-                k: tr_e.k,
-            });
-            let mut y = unpack(&tr_e.yn);
+                k: tr.k,
+            };
+            let ye = d.state(th);
+            self.dense = Some(d);
+            let mut y = unpack(&ye);
             match kind {
                 EventKind::Velocity => stop_velocity(&self.c, &mut y, &mut self.modes, i),
                 EventKind::Limit => stop_limit(&self.c, &mut y, &mut self.modes, i)?,

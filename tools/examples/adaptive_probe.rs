@@ -1,32 +1,15 @@
-use crane_tools::{adaptive_run, cases::Case, reference};
+use crane_tools::{cases::Case, reference, workprec};
 fn main() {
     for case in Case::all() {
-        let t0 = std::time::Instant::now();
         let refr = reference::reference(&case, 1e-3, 100).unwrap();
-        eprintln!("ref {:?}", t0.elapsed());
-        for h in [1e-3, 1e-2] {
-            let tr = reference::hybrid(&case, h, false).unwrap();
-            println!(
-                "{} fixed h {h}: rmse {:.3e}",
-                case.name,
-                reference::rmse(&case, &tr, &refr)
-            );
+        let o = workprec::Options::default();
+        let pts = workprec::sweep(&case, &refr, &o, |m| eprintln!("{m}")).unwrap();
+        for p in &pts {
+            println!("{:<60} {:>10.3e} s  rmse {:.3e} steps {}", workprec::setting_name(p), p.time_s, p.rmse, p.steps);
         }
-        for rtol in [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10] {
-            let tol = adaptive_run::tolerances(&case, rtol);
-            let t0 = std::time::Instant::now();
-            let (tr, st) = adaptive_run::hybrid_adaptive(&case, &tol).unwrap();
-            let el = t0.elapsed();
-            println!(
-                "{} rtol {rtol:e}: rmse {:.3e} steps {} rej {} evals {} events {} time {:?}",
-                case.name,
-                reference::rmse(&case, &tr, &refr),
-                st.accepted,
-                st.rejected,
-                st.evals,
-                st.events,
-                el
-            );
-        }
+        let lv = workprec::compare(&pts);
+        println!("{}", workprec::table(case.name, &lv));
+        let _ = std::fs::create_dir_all("out");
+        workprec::diagram(std::path::Path::new(&format!("out/wp_{}.svg", case.name.replace(' ', ""))), case.name, &pts, &lv).unwrap();
     }
 }

@@ -59,9 +59,16 @@ pub fn hybrid_adaptive(case: &Case, tol: &Tolerances) -> Result<(Trajectory, Ada
             if tk > s.t1 && s.t1 < t_end {
                 break;
             }
-            let st = a.dense(tk).ok_or_else(|| anyhow!("no dense output"))?;
-            tr.states.push(st);
-            tr.modes.push(a.modes());
+            // Inside the step: the dense output in the step's modes; at an event's end: the
+            // state after the reset, in the new modes.
+            if s.event.is_some() && tk >= s.t1 {
+                tr.states.push(a.state());
+                tr.modes.push(a.modes());
+            } else {
+                let st = a.dense(tk).ok_or_else(|| anyhow!("no dense output"))?;
+                tr.states.push(st);
+                tr.modes.push(a.step_modes());
+            }
             next += 1;
         }
     }
