@@ -285,6 +285,54 @@ impl Dense {
     }
 }
 
+/// The dense output of one accepted step as a polynomial in `th = (t - t0) / h`: cheap to
+/// evaluate at many times (a Horner scheme of degree 4 per component).
+#[derive(Clone, Copy, Debug)]
+pub struct DensePoly {
+    t0: f64,
+    h: f64,
+    th_end: f64,
+    y0: Y,
+    c: [Y; 4],
+}
+
+impl DensePoly {
+    fn new(d: &Dense) -> Self {
+        let mut c = [[0.0; 10]; 4];
+        for (p, cp) in c.iter_mut().enumerate() {
+            for (j, v) in cp.iter_mut().enumerate() {
+                let mut s = 0.0;
+                for (b, k) in BI.iter().zip(d.k.iter()) {
+                    s += b[p] * k[j];
+                }
+                *v = d.h * s;
+            }
+        }
+        DensePoly {
+            t0: d.t0,
+            h: d.h,
+            th_end: d.th_end,
+            y0: d.y0,
+            c,
+        }
+    }
+
+    /// The state at time `t` [s], clamped into the step (before an event's reset).
+    pub fn at(&self, t: f64) -> State<f64> {
+        let th = if self.h > 0.0 {
+            ((t - self.t0) / self.h).clamp(0.0, self.th_end)
+        } else {
+            0.0
+        };
+        let mut y = self.y0;
+        let [c0, c1, c2, c3] = &self.c;
+        for (j, v) in y.iter_mut().enumerate() {
+            *v += th * (c0[j] + th * (c1[j] + th * (c2[j] + th * c3[j])));
+        }
+        unpack(&y)
+    }
+}
+
 /// One Dormand-Prince trial step: stages, the 5th-order solution, its error vector, and the
 /// evaluations at the stages (for the breakaway guards).
 struct Trial {
@@ -380,6 +428,12 @@ impl Adaptive {
             0.0
         };
         Some(unpack(&d.state(th)))
+    }
+
+    /// The dense output of the last accepted step as a polynomial ([`DensePoly`]), for
+    /// sampling it at many times. None before the first step.
+    pub fn dense_poly(&self) -> Option<DensePoly> {
+        self.dense.as_ref().map(DensePoly::new)
     }
 
     fn eval(&mut self, y: &State<f64>, u: &[f64; 3]) -> Result<Eval<f64>, AdaptiveError> {
@@ -638,7 +692,13 @@ impl Adaptive {
             self.step_modes = self.modes;
             let event = self.find_event(h, &tr, u)?;
             let Some((th, kind, i)) = event else {
-                self.dense = Some(Dense { t0, h, th_end: 1.0, y0, k: tr.k });
+                self.dense = Some(Dense {
+                    t0,
+                    h,
+                    th_end: 1.0,
+                    y0,
+                    k: tr.k,
+                });
                 self.t = if last { t_end } else { self.t + h };
                 self.y = unpack(&tr.yn);
                 self.e1 = Some(tr.evals[6]);

@@ -54,6 +54,7 @@ pub fn hybrid_adaptive(case: &Case, tol: &Tolerances) -> Result<(Trajectory, Ada
         let s = a
             .step(t_end, &mut u)
             .map_err(|e| anyhow!("adaptive hybrid: {e} at t = {} s", a.time()))?;
+        let poly = a.dense_poly().ok_or_else(|| anyhow!("no dense output"))?;
         while next <= n {
             let tk = next as f64 * case.sample;
             if tk > s.t1 && s.t1 < t_end {
@@ -65,8 +66,7 @@ pub fn hybrid_adaptive(case: &Case, tol: &Tolerances) -> Result<(Trajectory, Ada
                 tr.states.push(a.state());
                 tr.modes.push(a.modes());
             } else {
-                let st = a.dense(tk).ok_or_else(|| anyhow!("no dense output"))?;
-                tr.states.push(st);
+                tr.states.push(poly.at(tk));
                 tr.modes.push(a.step_modes());
             }
             next += 1;

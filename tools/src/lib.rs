@@ -26,5 +26,5 @@ pub mod ode23s;
 pub mod ode45;
 pub mod reference;
 pub mod smooth;
-pub mod workprec;
 pub mod study;
+pub mod workprec;

@@ -110,9 +110,10 @@ enum Command {
         /// Simulated time of each [s].
         #[arg(long, default_value_t = 10.0)]
         duration: f64,
-        /// Model step [s].
-        #[arg(long, default_value_t = 1e-3)]
-        h: f64,
+        /// Fixed model step [s]; default: the adaptive integrator at rtol 1e-7 (the setting
+        /// that reaches 1e-6 m/s at the least cost, BENCHMARKS.md).
+        #[arg(long)]
+        h: Option<f64>,
         /// Seed.
         #[arg(long, default_value_t = 1)]
         seed: u64,

@@ -44,6 +44,8 @@ struct Lu<const N: usize> {
     piv: [usize; N],
 }
 
+// Index loops read as the textbook elimination; iterator forms would hide the row/column roles.
+#[allow(clippy::needless_range_loop)]
 impl<const N: usize> Lu<N> {
     fn new(mut a: [[f64; N]; N]) -> Option<Self> {
         let mut piv = [0usize; N];

@@ -56,7 +56,7 @@ fn converges_to_the_fixed_step_reference() {
 fn energy_never_rises_and_is_conserved_without_friction() {
     let case = Case::one();
     let (tr, _) = hybrid_adaptive(&case, &tolerances(&case, 1e-9)).unwrap();
-    let c = crane(&case, &case.params).coeffs().clone();
+    let c = *crane(&case, &case.params).coeffs();
     let mut lowest = f64::INFINITY;
     let e0 = energy(&c, &tr.states[0]);
     for s in &tr.states {
@@ -64,7 +64,10 @@ fn energy_never_rises_and_is_conserved_without_friction() {
         assert!(e <= lowest + 1e-9, "energy rose: {e} after {lowest}");
         lowest = lowest.min(e);
     }
-    assert!(lowest < e0 - 0.01, "friction must dissipate: {e0} -> {lowest}");
+    assert!(
+        lowest < e0 - 0.01,
+        "friction must dissipate: {e0} -> {lowest}"
+    );
 
     let mut p = case.params;
     p.y.dry_pos = [0.0; 5];
