@@ -8,8 +8,8 @@
 //! With [`Extensions`](crate::Extensions), `Cbar` gains localised bumps and, with stiction,
 //! a Stribeck rise near zero speed and a breakaway threshold `ratio * Cbar`.
 
-use crate::dynamics::AxisCoeffs;
-use crate::modes::Mode;
+use crate::coeffs::AxisCoeffs;
+use crate::mode::Mode;
 use crate::real::Real;
 
 /// `c0 + c1 p + c2 p^2 + c3 p^3 + c4 p^4` by Horner, not clamped.

@@ -127,7 +127,7 @@ enum Kind {
 }
 
 /// Velocity violation of a moving axis: its velocity is zero or points against its mode.
-fn velocity_violated<R: Real>(mode: Mode, qd: R) -> bool {
+pub(crate) fn velocity_violated<R: Real>(mode: Mode, qd: R) -> bool {
     match mode {
         Mode::Positive => qd <= R::ZERO,
         Mode::Negative => qd >= R::ZERO,
@@ -136,7 +136,7 @@ fn velocity_violated<R: Real>(mode: Mode, qd: R) -> bool {
 }
 
 /// Limit violation of a moving axis: it reached the limit it moves towards.
-fn limit_violated<R: Real>(mode: Mode, q: R, min: R, max: R) -> bool {
+pub(crate) fn limit_violated<R: Real>(mode: Mode, q: R, min: R, max: R) -> bool {
     match mode {
         Mode::Positive => q >= max,
         Mode::Negative => q <= min,
@@ -155,7 +155,12 @@ fn clamp<R: Real>(q: R, min: R, max: R) -> R {
 }
 
 /// Applies the reset of an axis that stops by a velocity event (`qd := 0`, `q` clamped).
-fn stop_velocity<R: Real>(c: &Coeffs<R>, y: &mut State<R>, modes: &mut [Mode; 3], i: usize) {
+pub(crate) fn stop_velocity<R: Real>(
+    c: &Coeffs<R>,
+    y: &mut State<R>,
+    modes: &mut [Mode; 3],
+    i: usize,
+) {
     let ax = &c.axes[i];
     y.qd[i] = R::ZERO;
     y.q[i] = clamp(y.q[i], ax.min, ax.max);
@@ -164,7 +169,7 @@ fn stop_velocity<R: Real>(c: &Coeffs<R>, y: &mut State<R>, modes: &mut [Mode; 3]
 
 /// Applies the reset of an axis that reached a limit: a plastic impact on its end stop
 /// ([`end_stop_impulse`]), then `q := limit`, `qd := 0`.
-fn stop_limit<R: Real>(
+pub(crate) fn stop_limit<R: Real>(
     c: &Coeffs<R>,
     y: &mut State<R>,
     modes: &mut [Mode; 3],
@@ -183,7 +188,11 @@ fn stop_limit<R: Real>(
 }
 
 /// Resets every moving axis whose velocity or position violates its mode; returns how many.
-fn sweep<R: Real>(c: &Coeffs<R>, y: &mut State<R>, modes: &mut [Mode; 3]) -> Result<u8, Singular> {
+pub(crate) fn sweep<R: Real>(
+    c: &Coeffs<R>,
+    y: &mut State<R>,
+    modes: &mut [Mode; 3],
+) -> Result<u8, Singular> {
     let mut n = 0;
     for i in 0..3 {
         let (min, max) = (c.axes[i].min, c.axes[i].max);

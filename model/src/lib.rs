@@ -8,7 +8,11 @@
 //!
 //! Where to look:
 //! - [`dynamics`]: the equations of motion `M(q) qdd + h + G = Q` and the holding forces.
-//! - [`modes`]: the automaton (modes, breakaway guards, resolution).
+//! - [`mode`]: the mode (direction of motion) of a drive axis.
+//! - [`coeffs`]: the coefficient tables precomputed from the parameters.
+//! - [`modes`]: the automaton's guards (breakaway margins, resolution), above the dynamics.
+//! - [`adaptive`]: the adaptive (Dormand-Prince 5(4), event-located) integrator for
+//!   offline use.
 //! - [`integrator`]: RK4, event location, resets, the bounded work per step.
 //! - [`friction`]: the hybrid and `tanh` friction laws, the dry-friction polynomial.
 //! - [`params`]: parameters, defaults, validation.
@@ -28,12 +32,15 @@
 #![allow(rustdoc::broken_intra_doc_links)]
 #![deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+pub mod adaptive;
+pub mod coeffs;
 pub mod crane;
 pub mod drive;
 pub mod dynamics;
 pub mod extensions;
 pub mod friction;
 pub mod integrator;
+pub mod mode;
 pub mod modes;
 pub mod params;
 pub mod real;

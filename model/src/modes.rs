@@ -11,34 +11,12 @@
 //!   [`resolve`] at the start of every step and at once after every event, so a reversal
 //!   passes through `Stopped` within the same instant.
 
-use crate::dynamics::{at_state, eval_at, AxisCoeffs, Coeffs, Eval, Law, Singular};
+use crate::coeffs::{AxisCoeffs, Coeffs};
+use crate::dynamics::{at_state, eval_at, Eval, Law, Singular};
 use crate::friction::breakaway;
+pub use crate::mode::Mode;
 use crate::real::Real;
 use crate::state::State;
-
-/// Motion mode of one drive axis.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Mode {
-    /// Moving towards decreasing coordinate (`qd < 0`; for the rope: hoisting).
-    Negative,
-    /// At rest: `qd = 0` and `qdd = 0` exactly; friction holds the axis.
-    Stopped,
-    /// Moving towards increasing coordinate (`qd > 0`; for the rope: lowering).
-    Positive,
-}
-
-impl Mode {
-    /// The mode that an axis moving with velocity `v` is in (0 is `Stopped`).
-    pub fn of_velocity(v: f64) -> Mode {
-        if v > 0.0 {
-            Mode::Positive
-        } else if v < 0.0 {
-            Mode::Negative
-        } else {
-            Mode::Stopped
-        }
-    }
-}
 
 /// Breakaway margin [N] of a stopped axis for a direction: positive when the guard holds.
 ///

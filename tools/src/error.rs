@@ -33,6 +33,30 @@ pub enum Error {
         /// The model's error.
         error: crane_model::StepError,
     },
+    /// The adaptive hybrid integrator stopped (`crane_model::adaptive`).
+    #[error("{what} at t = {t} s: {error}")]
+    Adaptive {
+        /// Which run.
+        what: &'static str,
+        /// Time reached [s].
+        t: f64,
+        /// The integrator's reason.
+        error: crane_model::adaptive::AdaptiveError,
+    },
+    /// The adaptive integrator kept no dense output for its last step (an internal error).
+    #[error("adaptive hybrid at t = {t} s: no dense output of the last step")]
+    NoDenseOutput {
+        /// Time reached [s].
+        t: f64,
+    },
+    /// The Rosenbrock (ode23s) solver stopped early on a `tanh` model.
+    #[error("Rosenbrock, tanh({gamma} v): {failure}")]
+    Rosenbrock {
+        /// The slope factor [s/m].
+        gamma: f64,
+        /// Why.
+        failure: String,
+    },
     /// ode45 stopped early on a `tanh` model.
     #[error("ode45, tanh({gamma} v): {failure}")]
     Ode45 {

@@ -21,12 +21,15 @@
 
 #![forbid(unsafe_code)]
 
+pub mod adaptive_run;
 pub mod cases;
 pub mod error;
 pub mod figures;
 pub mod montecarlo;
+pub mod ode23s;
 pub mod ode45;
 pub mod output;
 pub mod reference;
 pub mod smooth;
 pub mod study;
+pub mod workprec;

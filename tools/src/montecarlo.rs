@@ -9,8 +9,10 @@
 //! SplitMix64 generator seeded per simulation index, so results do not depend on the
 //! thread count or schedule.
 
+use crate::adaptive_run::tolerances;
 use crate::cases::Case;
 use crate::error::{Error, Result};
+use crane_model::adaptive::Adaptive;
 use crane_model::{Config, Crane, FrictionLaw, Mode};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -62,8 +64,10 @@ pub struct Summary {
     pub sims: usize,
     /// Simulated time of each [s].
     pub duration: f64,
-    /// Step [s].
+    /// Fixed step [s] (fixed-step runs; else 0).
     pub h: f64,
+    /// Tolerance `rtol` of the adaptive integrator (adaptive runs).
+    pub rtol: Option<f64>,
     /// Worker threads.
     pub threads: usize,
     /// Wall time of the batch [s].
@@ -80,8 +84,22 @@ pub struct Summary {
     pub at_rest: f64,
 }
 
+/// How each simulation is integrated.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Stepper {
+    /// The fixed-step (real-time) path at this step [s].
+    Fixed(f64),
+    /// The adaptive integrator at this `rtol` (tolerances of [`tolerances`]).
+    Adaptive(f64),
+}
+
 /// Simulation `index` of a batch with `seed`: `duration` seconds at step `h`.
 pub fn simulate(seed: u64, index: u64, duration: f64, h: f64) -> Result<Outcome> {
+    simulate_with(seed, index, duration, Stepper::Fixed(h))
+}
+
+/// Simulation `index` of a batch with `seed`: `duration` seconds with `stepper`.
+pub fn simulate_with(seed: u64, index: u64, duration: f64, stepper: Stepper) -> Result<Outcome> {
     let case = Case::one();
     let mut rng = SplitMix64::new(seed ^ index.wrapping_mul(0xD1B5_4A32_D192_ED03));
     let mut draw = || 0.7 + 0.6 * rng.uniform();
@@ -91,6 +109,10 @@ pub fn simulate(seed: u64, index: u64, duration: f64, h: f64) -> Result<Outcome>
     p.x.dry_neg[0] = friction[1];
     p.y.dry_pos[0] = friction[2];
     p.y.dry_neg[0] = friction[3];
+    let h = match stepper {
+        Stepper::Fixed(h) => h,
+        Stepper::Adaptive(_) => 1e-3,
+    };
     let mut crane: Crane = Crane::new(
         &p,
         Config {
@@ -103,6 +125,37 @@ pub fn simulate(seed: u64, index: u64, duration: f64, h: f64) -> Result<Outcome>
         what: "Monte Carlo model",
         error,
     })?;
+    if let Stepper::Adaptive(rtol) = stepper {
+        let tol = tolerances(&case, rtol);
+        let mut a = Adaptive::new(crane.coeffs(), tol, 0.0, crane.state(), crane.modes()).map_err(
+            |error| Error::Adaptive {
+                what: "Monte Carlo model (adaptive)",
+                t: 0.0,
+                error,
+            },
+        )?;
+        let mut rest_from = None;
+        let mut u = |_t: f64| [0.0; 3];
+        while a.time() < duration {
+            let t = a.time();
+            let s = a.step(duration, &mut u).map_err(|error| Error::Adaptive {
+                what: "Monte Carlo model (adaptive)",
+                t,
+                error,
+            })?;
+            if a.modes()[1] == Mode::Stopped {
+                rest_from.get_or_insert(s.t1);
+            } else {
+                rest_from = None;
+            }
+        }
+        return Ok(Outcome {
+            friction,
+            y_final: a.state().q[1],
+            rest_from,
+            steps: a.stats().accepted,
+        });
+    }
     let n = (duration / h).round() as u64;
     let mut rest_from = None;
     for k in 0..n {
@@ -125,17 +178,28 @@ pub fn simulate(seed: u64, index: u64, duration: f64, h: f64) -> Result<Outcome>
     })
 }
 
-/// `sims` simulations in parallel on the current rayon pool.
+/// `sims` simulations at fixed step `h` in parallel on the current rayon pool.
 pub fn run(sims: usize, duration: f64, h: f64, seed: u64) -> Result<(Summary, Vec<Outcome>)> {
-    run_with_progress(sims, duration, h, seed, || {})
+    run_with(sims, duration, Stepper::Fixed(h), seed)
 }
 
-/// [`run`], calling `done` after each finished simulation (from the worker threads; e.g. a
-/// progress bar's `inc(1)`). The results do not depend on `done`.
+/// [`run_with_progress`] without a progress callback.
+pub fn run_with(
+    sims: usize,
+    duration: f64,
+    stepper: Stepper,
+    seed: u64,
+) -> Result<(Summary, Vec<Outcome>)> {
+    run_with_progress(sims, duration, stepper, seed, || {})
+}
+
+/// `sims` simulations with `stepper` in parallel on the current rayon pool, calling `done`
+/// after each finished simulation (from the worker threads; e.g. a progress bar's `inc(1)`).
+/// The results do not depend on `done`.
 pub fn run_with_progress(
     sims: usize,
     duration: f64,
-    h: f64,
+    stepper: Stepper,
     seed: u64,
     done: impl Fn() + Sync,
 ) -> Result<(Summary, Vec<Outcome>)> {
@@ -143,11 +207,15 @@ pub fn run_with_progress(
     let out: Result<Vec<Outcome>> = (0..sims as u64)
         .into_par_iter()
         .map(|i| {
-            let r = simulate(seed, i, duration, h);
+            let r = simulate_with(seed, i, duration, stepper);
             done();
             r
         })
         .collect();
+    let (h, rtol) = match stepper {
+        Stepper::Fixed(h) => (h, None),
+        Stepper::Adaptive(r) => (0.0, Some(r)),
+    };
     let out = out?;
     let wall_s = t0.elapsed().as_secs_f64();
     let n = out.len().max(1) as f64;
@@ -159,6 +227,7 @@ pub fn run_with_progress(
             sims,
             duration,
             h,
+            rtol,
             threads: rayon::current_num_threads(),
             wall_s,
             sims_per_s: sims as f64 / wall_s,

@@ -21,9 +21,9 @@
 
 use crate::cases::{Case, CaseId};
 use crate::error::{Error, Result};
-use crate::ode45;
 use crate::reference::{self, Convergence, Trajectory};
 use crate::smooth::{pack, rk4_step_k1, unpack, Friction, Smooth, Y};
+use crate::{adaptive_run, ode45, workprec};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -71,7 +71,23 @@ pub struct Options {
     /// Wall-time budget per timed model [s]: runs are repeated until it is spent (at least
     /// 3 runs, at most 50) and the fastest run is reported.
     pub timing_budget: f64,
+    /// The hybrid row's setting: the adaptive integrator at this `rtol` (the default,
+    /// [`DEFAULT_RTOL`]), or, with `None`, the fixed step `h`.
+    pub hybrid_rtol: Option<f64>,
+    /// Run the work-precision sweep ([`crate::workprec`]).
+    pub work_precision: bool,
 }
+
+/// The accuracy the defaults of `crane study` and `crane mc` are chosen for: RMSE of the
+/// compared velocity at most 1e-6 m/s in both cases.
+pub const STATED_ACCURACY: f64 = 1e-6;
+
+/// The hybrid model's default setting: the adaptive integrator at `rtol = 1e-7`
+/// (`atol = 1e-9`), the cheapest setting on the work-precision diagrams of both cases that
+/// reaches [`STATED_ACCURACY`] (case 1: 5.7e-8 m/s, case 2: 1.5e-7 m/s; `rtol = 1e-6` misses
+/// it in case 1 with 1.2e-6; fixed steps need 1 ms in case 1 and below 0.1 ms in case 2, at
+/// 10x to 100x the cost).
+pub const DEFAULT_RTOL: f64 = 1e-7;
 
 impl Default for Options {
     fn default() -> Self {
@@ -84,6 +100,8 @@ impl Default for Options {
             rk4_search: true,
             equal_accuracy: true,
             timing_budget: 0.3,
+            hybrid_rtol: Some(DEFAULT_RTOL),
+            work_precision: true,
         }
     }
 }
@@ -157,8 +175,12 @@ pub struct CaseReport {
     pub rows: Vec<Row>,
     /// Hybrid at equal or better accuracy than each tanh model.
     pub equal_accuracy: Vec<EqualAccuracy>,
-    /// `time(tanh(1000 v), ode45) / time(hybrid, default step)` (the paper: 55 for case 1).
+    /// `time(tanh(1000 v), ode45) / time(hybrid, default setting)` (the paper: 55 for case 1).
     pub ratio_tanh1000_hybrid: Option<f64>,
+    /// Work-precision points (empty unless asked for).
+    pub work_precision: Vec<workprec::Point>,
+    /// The fastest hybrid and tanh settings at each error level.
+    pub levels: Vec<workprec::Level>,
 }
 
 /// Trajectories kept for the figures.
@@ -339,23 +361,50 @@ pub fn run_case(
 
     let mut rows = Vec::new();
     progress(&format!("{}: hybrid", case.name));
-    let (t_h, hyb) = time_best(o.timing_budget, || reference::hybrid(case, o.h, false))?;
     let (pt, pr) = paper(case.id, 0);
-    rows.push(Row {
-        model: "hybrid".into(),
-        law: "hybrid",
-        gamma: None,
-        solver: "hybrid RK4 + events",
-        h: Some(o.h),
-        time_s: t_h,
-        rmse: reference::rmse(case, &hyb, &refr),
-        steps: hyb.steps,
-        evals: None,
-        rejected: None,
-        events: Some(hyb.events),
-        paper_time_s: Some(pt),
-        paper_rmse: Some(pr),
-    });
+    let t_h = match o.hybrid_rtol {
+        Some(rtol) => {
+            let tol = adaptive_run::tolerances(case, rtol);
+            let (t, (hyb, st)) = time_best(o.timing_budget, || {
+                adaptive_run::hybrid_adaptive(case, &tol)
+            })?;
+            rows.push(Row {
+                model: "hybrid".into(),
+                law: "hybrid",
+                gamma: None,
+                solver: "hybrid DP45 + events",
+                h: None,
+                time_s: t,
+                rmse: reference::rmse(case, &hyb, &refr),
+                steps: st.accepted,
+                evals: Some(st.evals),
+                rejected: Some(st.rejected),
+                events: Some(st.events),
+                paper_time_s: Some(pt),
+                paper_rmse: Some(pr),
+            });
+            t
+        }
+        None => {
+            let (t, hyb) = time_best(o.timing_budget, || reference::hybrid(case, o.h, false))?;
+            rows.push(Row {
+                model: "hybrid".into(),
+                law: "hybrid",
+                gamma: None,
+                solver: "hybrid RK4 + events",
+                h: Some(o.h),
+                time_s: t,
+                rmse: reference::rmse(case, &hyb, &refr),
+                steps: hyb.steps,
+                evals: None,
+                rejected: None,
+                events: Some(hyb.events),
+                paper_time_s: Some(pt),
+                paper_rmse: Some(pr),
+            });
+            t
+        }
+    };
 
     let mut tanh = Vec::new();
     let mut ode_rows = Vec::new();
@@ -459,6 +508,14 @@ pub fn run_case(
         .iter()
         .find(|r| r.gamma == Some(1000.0))
         .map(|r| r.time_s / t_h);
+    let (work_precision, levels) = if o.work_precision {
+        let wo = workprec::Options::default();
+        let pts = workprec::sweep(case, &refr, &wo, &mut progress)?;
+        let lv = workprec::compare(&pts);
+        (pts, lv)
+    } else {
+        (Vec::new(), Vec::new())
+    };
     let hybrid_out = reference::hybrid(case, o.h, true)?;
     Ok((
         CaseReport {
@@ -471,6 +528,8 @@ pub fn run_case(
             rows,
             equal_accuracy,
             ratio_tanh1000_hybrid,
+            work_precision,
+            levels,
         },
         CaseData {
             case: case.clone(),
@@ -532,6 +591,7 @@ pub fn table(reports: &[CaseReport]) -> String {
             .map(|r| match (r.solver, r.h) {
                 ("ode45", _) => format!("{} ode45", r.model),
                 ("RK4", _) => format!("{} RK4 (max stable h)", r.model),
+                ("hybrid DP45 + events", _) => format!("{} adaptive (default)", r.model),
                 (_, Some(h)) => format!("{} (h = {} ms)", r.model, fmt_g(h * 1e3)),
                 _ => r.model.clone(),
             })
@@ -573,7 +633,7 @@ pub fn table(reports: &[CaseReport]) -> String {
         }
         if let Some(x) = r.ratio_tanh1000_hybrid {
             s.push_str(&format!(
-                "  time tanh(1000 v) ode45 / hybrid at h = 1 ms: {} (paper, case 1: 54.7; case 2: 29.1)\n",
+                "  time tanh(1000 v) ode45 / hybrid at its default setting: {} (paper, case 1: 54.7; case 2: 29.1)\n",
                 fmt_g(x)
             ));
         }
@@ -593,6 +653,10 @@ pub fn table(reports: &[CaseReport]) -> String {
                     tanh_name(e.gamma)
                 )),
             }
+        }
+        if !r.levels.is_empty() {
+            s.push('\n');
+            s.push_str(&workprec::table(&format!("{:?}", r.case), &r.levels));
         }
     }
     s

@@ -3,7 +3,7 @@
 use anyhow::{bail, Result};
 use crane_tools::cases::Case;
 use crane_tools::output::Outputs;
-use crane_tools::{figures, montecarlo, study};
+use crane_tools::{figures, montecarlo, study, workprec};
 use std::path::Path;
 
 /// `crane study`: both cases, the table (or JSON), the figures and `study.json` in `out`.
@@ -12,6 +12,7 @@ pub fn study(out: &Path, json: bool, quick: bool, budget: f64, force: bool) -> R
     let jpath = out.join("study.json");
     outputs.check(&jpath)?;
     let opts = study::Options {
+        work_precision: !quick,
         rk4_search: !quick,
         equal_accuracy: !quick,
         timing_budget: budget,
@@ -24,14 +25,31 @@ pub fn study(out: &Path, json: bool, quick: bool, budget: f64, force: bool) -> R
     let reports = vec![r1, r2];
     let js = serde_json::to_string_pretty(&reports)?;
     outputs.write(&jpath, &js)?;
-    let figs = figures::write(out, &d1, &d2, &outputs)?;
+    let mut figs = figures::write(out, &d1, &d2, &outputs)?;
+    for (r, name) in reports.iter().zip(["case1", "case2"]) {
+        if r.work_precision.is_empty() {
+            continue;
+        }
+        let p = out.join(format!("{name}_work_precision.svg"));
+        let title = format!(
+            "{}: work-precision (wall time against velocity RMSE)",
+            if name == "case1" { "Case 1" } else { "Case 2" }
+        );
+        workprec::diagram(&p, &title, &r.work_precision, &r.levels, &outputs)?;
+        figs.push(p);
+    }
     if json {
         out!("{js}");
     } else {
         out!("{}", study::table(&reports));
         out!(
-            "ode45: rtol {}, atol {}; reference: hybrid at h / {}; times: fastest of repeated runs, one thread",
-            opts.ode.rtol, opts.ode.atol, opts.ref_div
+            "ode45: rtol {}, atol {}; hybrid (default): adaptive DP45 with located events, rtol {:e}, atol {:e} (chosen to reach RMSE {:e} m/s in both cases at the least cost); reference: hybrid at h / {}; times: fastest of repeated runs, one thread",
+            opts.ode.rtol,
+            opts.ode.atol,
+            study::DEFAULT_RTOL,
+            study::DEFAULT_RTOL * 1e-2,
+            study::STATED_ACCURACY,
+            opts.ref_div
         );
         for f in figs.iter().chain([&jpath]) {
             out!("wrote {}", f.display());
@@ -44,14 +62,28 @@ pub fn study(out: &Path, json: bool, quick: bool, budget: f64, force: bool) -> R
 pub const MAX_STEPS: f64 = 1e8;
 
 /// `crane mc`: a Monte Carlo batch on all cores.
-pub fn mc(sims: u64, duration: f64, h: f64, seed: u64, json: bool) -> Result<montecarlo::Summary> {
-    let steps = (duration / h).round();
-    if steps > MAX_STEPS {
-        bail!("--duration {duration} / --h {h} = {steps:e} steps per simulation; at most {MAX_STEPS:e}");
-    }
-    if steps < 1.0 {
-        bail!("--duration {duration} is shorter than one step --h {h}");
-    }
+/// Fixed step `h` if given (at most [`MAX_STEPS`] per simulation), else the adaptive
+/// integrator at the study's default tolerance ([`study::DEFAULT_RTOL`]).
+pub fn mc(
+    sims: u64,
+    duration: f64,
+    h: Option<f64>,
+    seed: u64,
+    json: bool,
+) -> Result<montecarlo::Summary> {
+    let stepper = match h {
+        Some(h) => {
+            let steps = (duration / h).round();
+            if steps > MAX_STEPS {
+                bail!("--duration {duration} / --h {h} = {steps:e} steps per simulation; at most {MAX_STEPS:e}");
+            }
+            if steps < 1.0 {
+                bail!("--duration {duration} is shorter than one step --h {h}");
+            }
+            montecarlo::Stepper::Fixed(h)
+        }
+        None => montecarlo::Stepper::Adaptive(study::DEFAULT_RTOL),
+    };
     let sims = usize::try_from(sims)?;
     // progress on stderr; indicatif draws nothing when stderr is not a terminal
     let pb = indicatif::ProgressBar::new(sims as u64);
@@ -61,13 +93,17 @@ pub fn mc(sims: u64, duration: f64, h: f64, seed: u64, json: bool) -> Result<mon
         )
         .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    let result = montecarlo::run_with_progress(sims, duration, h, seed, || pb.inc(1));
+    let result = montecarlo::run_with_progress(sims, duration, stepper, seed, || pb.inc(1));
     pb.finish_and_clear();
     let (s, _) = result?;
     if !json {
+        let how = match s.rtol {
+            Some(r) => format!("adaptive, rtol {r:e}"),
+            None => format!("h = {} s", s.h),
+        };
         out!(
-            "{} simulations of {} s (h = {} s) on {} threads: {:.3} s wall, {:.1} simulations/s, {:.3e} steps/s",
-            s.sims, s.duration, s.h, s.threads, s.wall_s, s.sims_per_s, s.steps_per_s
+            "{} simulations of {} s ({how}) on {} threads: {:.3} s wall, {:.1} simulations/s, {:.3e} steps/s",
+            s.sims, s.duration, s.threads, s.wall_s, s.sims_per_s, s.steps_per_s
         );
         out!(
             "trolley end position {:.4} +- {:.4} m (1 sigma); stopped at the end: {:.1} %",

@@ -1,0 +1,762 @@
+//! Adaptive, error-controlled integration of the hybrid automaton, for offline use.
+//!
+//! The fixed-step path ([`crate::Crane::step`], [`crate::integrator`]) stays the real-time and
+//! bit-exact one; this module is a second integrator of the same hybrid model for studies,
+//! batches and references, where the cost of a run matters more than a bounded cost per step.
+//!
+//! - Inside a mode: the embedded Dormand-Prince 5(4) pair (FSAL, local extrapolation), the
+//!   RMS error norm over the ten components `(q, qd)` with `atol + rtol max(|y|, |y_new|)`,
+//!   the step controller `h min(5, max(0.2, 0.9 err^(-1/5)))` (no growth right after a
+//!   rejection), and the 4th-order continuous extension of MATLAB's `ntrp45` as dense output.
+//!   The same method as `tools/src/ode45.rs`, here on the hybrid law: a stopped axis has
+//!   `qd = 0` and `qdd = 0` exactly in every stage, so it stays exactly where it is, and a
+//!   state with every drive axis stopped and the swing at rest has a zero error estimate:
+//!   the steps then grow freely (up to [`Tolerances::hmax`]).
+//! - Events, on every accepted trial step: a moving axis's velocity reaching 0 and its
+//!   position reaching the limit it moves towards are found on the dense output (sampled at
+//!   eight points of the step, then bisection), a stopped axis's breakaway by its margin at
+//!   the stage evaluations, then bisection on the margin evaluated at the dense state. All
+//!   are located to [`Tolerances::event`] seconds. The state at the earliest event is taken
+//!   from the dense output (where the event was located), the reset applied (the
+//!   resets of `NUMERICS.md`: velocity `qd := 0`, limit end-stop impulse), every other
+//!   violation swept, and the modes re-resolved there ([`crate::modes`]); the next step
+//!   starts from the event.
+//! - The input is a function of time (the caller's continuous-time input), not a held value.
+//! - Not here: the swing stops of the fixed-step path (a run that leaves the model's domain
+//!   fails with [`AdaptiveError::NonFinite`] or [`AdaptiveError::Singular`] instead).
+//!
+//! `no_std`, no heap: the integrator holds its last step's stages for the dense output
+//! (`f64` only: offline use needs no `f32`).
+
+use crate::coeffs::Coeffs;
+use crate::dynamics::{at_state, eval, Eval, Law, Singular};
+use crate::integrator::{limit_violated, stop_limit, stop_velocity, sweep, velocity_violated};
+use crate::mode::Mode;
+use crate::modes::{candidate, margin, resolve};
+use crate::state::State;
+
+/// Error control of the adaptive integrator.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tolerances {
+    /// Relative tolerance (> 0).
+    pub rtol: f64,
+    /// Absolute tolerance, in the units of every component (m, rad, m/s, rad/s; > 0).
+    pub atol: f64,
+    /// Largest step [s] (> 0; may be infinite). The breakaway guards are only sampled at the
+    /// stages of a step, so with a time-varying input this should resolve the input (a tenth
+    /// of its shortest period, say).
+    pub hmax: f64,
+    /// Time tolerance [s] of the event location (> 0).
+    pub event: f64,
+}
+
+impl Default for Tolerances {
+    fn default() -> Self {
+        Tolerances {
+            rtol: 1e-6,
+            atol: 1e-8,
+            hmax: f64::INFINITY,
+            event: 1e-10,
+        }
+    }
+}
+
+/// Why the adaptive integration stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AdaptiveError {
+    /// The mass matrix was not positive definite.
+    Singular,
+    /// A non-finite state or input.
+    NonFinite,
+    /// The step fell below the resolution of the time.
+    StepTooSmall,
+    /// A tolerance was not positive (or NaN).
+    BadTolerance,
+}
+
+impl From<Singular> for AdaptiveError {
+    fn from(_: Singular) -> Self {
+        AdaptiveError::Singular
+    }
+}
+
+impl core::fmt::Display for AdaptiveError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            AdaptiveError::Singular => write!(f, "mass matrix not positive definite"),
+            AdaptiveError::NonFinite => write!(f, "non-finite state or input"),
+            AdaptiveError::StepTooSmall => write!(f, "step size underflow"),
+            AdaptiveError::BadTolerance => write!(f, "tolerances must be positive"),
+        }
+    }
+}
+
+/// Work done so far.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AdaptiveStats {
+    /// Accepted steps (including the shortened steps that end at an event).
+    pub accepted: u64,
+    /// Rejected trial steps.
+    pub rejected: u64,
+    /// Evaluations of the dynamics (mode resolutions count each of theirs).
+    pub evals: u64,
+    /// Events located (velocity zeros, limits, breakaways).
+    pub events: u64,
+}
+
+/// Kind of a located event.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EventKind {
+    /// A moving axis's velocity reached 0.
+    Velocity,
+    /// A moving axis reached the limit it moves towards.
+    Limit,
+    /// A stopped axis's holding force reached its breakaway threshold.
+    Breakaway,
+}
+
+/// One accepted step: the dense output covers `[t0, t1]`; with an event the state at `t1`
+/// is after its reset and mode resolution.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepInfo {
+    /// Start [s].
+    pub t0: f64,
+    /// End [s].
+    pub t1: f64,
+    /// The event the step ended at, with its axis.
+    pub event: Option<(EventKind, usize)>,
+}
+
+type Y = [f64; 10];
+
+const C: [f64; 7] = [0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0];
+const A: [[f64; 5]; 5] = [
+    [1.0 / 5.0, 0.0, 0.0, 0.0, 0.0],
+    [3.0 / 40.0, 9.0 / 40.0, 0.0, 0.0, 0.0],
+    [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0, 0.0, 0.0],
+    [
+        19372.0 / 6561.0,
+        -25360.0 / 2187.0,
+        64448.0 / 6561.0,
+        -212.0 / 729.0,
+        0.0,
+    ],
+    [
+        9017.0 / 3168.0,
+        -355.0 / 33.0,
+        46732.0 / 5247.0,
+        49.0 / 176.0,
+        -5103.0 / 18656.0,
+    ],
+];
+const B: [f64; 6] = [
+    35.0 / 384.0,
+    0.0,
+    500.0 / 1113.0,
+    125.0 / 192.0,
+    -2187.0 / 6784.0,
+    11.0 / 84.0,
+];
+// Error weights: 5th-order minus 4th-order weights (7 stages, FSAL).
+const E: [f64; 7] = [
+    71.0 / 57600.0,
+    0.0,
+    -71.0 / 16695.0,
+    71.0 / 1920.0,
+    -17253.0 / 339200.0,
+    22.0 / 525.0,
+    -1.0 / 40.0,
+];
+// Dense output (MATLAB ntrp45): b_i(th) = sum_j BI[i][j] th^(j+1).
+const BI: [[f64; 4]; 7] = [
+    [1.0, -183.0 / 64.0, 37.0 / 12.0, -145.0 / 128.0],
+    [0.0, 0.0, 0.0, 0.0],
+    [0.0, 1500.0 / 371.0, -1000.0 / 159.0, 1000.0 / 371.0],
+    [0.0, -125.0 / 32.0, 125.0 / 12.0, -375.0 / 64.0],
+    [0.0, 9477.0 / 3392.0, -729.0 / 106.0, 25515.0 / 6784.0],
+    [0.0, -11.0 / 7.0, 11.0 / 3.0, -55.0 / 28.0],
+    [0.0, 1.5, -4.0, 2.5],
+];
+/// Dense-output samples per step for finding velocity and limit events.
+const EVENT_SAMPLES: usize = 8;
+/// Bisection iterations at most when locating an event.
+const MAX_BISECTIONS: usize = 60;
+
+fn join(a: &[f64; 5], b: &[f64; 5]) -> Y {
+    let [a0, a1, a2, a3, a4] = *a;
+    let [b0, b1, b2, b3, b4] = *b;
+    [a0, a1, a2, a3, a4, b0, b1, b2, b3, b4]
+}
+
+fn pack(s: &State<f64>) -> Y {
+    join(&s.q, &s.qd)
+}
+
+fn unpack(y: &Y) -> State<f64> {
+    let [a, b, c, d, e, f, g, h, i, j] = *y;
+    State {
+        q: [a, b, c, d, e],
+        qd: [f, g, h, i, j],
+    }
+}
+
+fn deriv(s: &State<f64>, e: &Eval<f64>) -> Y {
+    join(&s.qd, &e.qdd)
+}
+
+fn saturate(u: [f64; 3]) -> Result<[f64; 3], AdaptiveError> {
+    let lim = crate::crane::U_MAX;
+    let mut out = [0.0; 3];
+    for (o, v) in out.iter_mut().zip(u) {
+        if !v.is_finite() {
+            return Err(AdaptiveError::NonFinite);
+        }
+        *o = v.clamp(-lim, lim);
+    }
+    Ok(out)
+}
+
+/// Weights of the dense output at `th` in [0, 1].
+fn dense_weights(th: f64) -> [f64; 7] {
+    let p = [th, th * th, th * th * th, th * th * th * th];
+    let mut w = [0.0; 7];
+    for (wi, b) in w.iter_mut().zip(BI.iter()) {
+        *wi = b[0] * p[0] + b[1] * p[1] + b[2] * p[2] + b[3] * p[3];
+    }
+    w
+}
+
+/// Bisection on `th` in `(lo, hi]`: the first point where `hit` holds (`hit(hi)` is true),
+/// to `tol` seconds on a step of length `h`.
+fn bisect(
+    h: f64,
+    tol: f64,
+    mut lo: f64,
+    mut hi: f64,
+    mut hit: impl FnMut(f64) -> Result<bool, AdaptiveError>,
+) -> Result<f64, AdaptiveError> {
+    for _ in 0..MAX_BISECTIONS {
+        if (hi - lo) * h <= tol {
+            break;
+        }
+        let mid = 0.5 * (lo + hi);
+        if hit(mid)? {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    Ok(hi)
+}
+
+/// The last accepted step's stages, for the dense output.
+#[derive(Clone, Copy, Debug)]
+struct Dense {
+    t0: f64,
+    /// Length of the trial step the stages belong to [s].
+    h: f64,
+    /// End of the accepted part, as a fraction of `h` (1, or the event's fraction).
+    th_end: f64,
+    y0: Y,
+    k: [Y; 7],
+}
+
+impl Dense {
+    fn component(&self, j: usize, th: f64) -> f64 {
+        let w = dense_weights(th);
+        let mut s = 0.0;
+        for (wi, k) in w.iter().zip(self.k.iter()) {
+            s += wi * k[j];
+        }
+        self.y0[j] + self.h * s
+    }
+
+    fn state(&self, th: f64) -> Y {
+        let w = dense_weights(th);
+        let mut y = self.y0;
+        for (j, v) in y.iter_mut().enumerate() {
+            let mut s = 0.0;
+            for (wi, k) in w.iter().zip(self.k.iter()) {
+                s += wi * k[j];
+            }
+            *v += self.h * s;
+        }
+        y
+    }
+}
+
+/// The dense output of one accepted step as a polynomial in `th = (t - t0) / h`: cheap to
+/// evaluate at many times (a Horner scheme of degree 4 per component).
+#[derive(Clone, Copy, Debug)]
+pub struct DensePoly {
+    t0: f64,
+    h: f64,
+    th_end: f64,
+    y0: Y,
+    c: [Y; 4],
+}
+
+impl DensePoly {
+    fn new(d: &Dense) -> Self {
+        let mut c = [[0.0; 10]; 4];
+        for (p, cp) in c.iter_mut().enumerate() {
+            for (j, v) in cp.iter_mut().enumerate() {
+                let mut s = 0.0;
+                for (b, k) in BI.iter().zip(d.k.iter()) {
+                    s += b[p] * k[j];
+                }
+                *v = d.h * s;
+            }
+        }
+        DensePoly {
+            t0: d.t0,
+            h: d.h,
+            th_end: d.th_end,
+            y0: d.y0,
+            c,
+        }
+    }
+
+    /// The state at time `t` [s], clamped into the step (before an event's reset).
+    pub fn at(&self, t: f64) -> State<f64> {
+        let th = if self.h > 0.0 {
+            ((t - self.t0) / self.h).clamp(0.0, self.th_end)
+        } else {
+            0.0
+        };
+        let mut y = self.y0;
+        let [c0, c1, c2, c3] = &self.c;
+        for (j, v) in y.iter_mut().enumerate() {
+            *v += th * (c0[j] + th * (c1[j] + th * (c2[j] + th * c3[j])));
+        }
+        unpack(&y)
+    }
+}
+
+/// One Dormand-Prince trial step: stages, the 5th-order solution, its error vector, and the
+/// evaluations at the stages (for the breakaway guards).
+struct Trial {
+    k: [Y; 7],
+    yn: Y,
+    err: Y,
+    evals: [Eval<f64>; 7],
+}
+
+/// The adaptive integrator of the hybrid model (see the module documentation).
+#[derive(Clone, Debug)]
+pub struct Adaptive {
+    c: Coeffs<f64>,
+    tol: Tolerances,
+    t: f64,
+    y: State<f64>,
+    modes: [Mode; 3],
+    /// Evaluation at `(t, y)` in `modes` (FSAL); None before the first step.
+    e1: Option<Eval<f64>>,
+    h: f64,
+    dense: Option<Dense>,
+    /// The modes the last accepted step was taken in (those of its dense output).
+    step_modes: [Mode; 3],
+    stats: AdaptiveStats,
+    rejected_last: bool,
+}
+
+impl Adaptive {
+    /// An integrator at time `t0` [s], state `y0` and modes `modes0` (e.g. from a
+    /// [`crate::Crane`]: `crane.coeffs()`, `crane.state()`, `crane.modes()`).
+    pub fn new(
+        c: &Coeffs<f64>,
+        tol: Tolerances,
+        t0: f64,
+        y0: State<f64>,
+        modes0: [Mode; 3],
+    ) -> Result<Self, AdaptiveError> {
+        let ok = |x: f64| x > 0.0;
+        if !(ok(tol.rtol) && ok(tol.atol) && ok(tol.hmax) && ok(tol.event)) {
+            return Err(AdaptiveError::BadTolerance);
+        }
+        if !y0.is_finite() || !t0.is_finite() {
+            return Err(AdaptiveError::NonFinite);
+        }
+        Ok(Adaptive {
+            c: *c,
+            tol,
+            t: t0,
+            y: y0,
+            modes: modes0,
+            e1: None,
+            h: 0.0,
+            dense: None,
+            step_modes: modes0,
+            stats: AdaptiveStats::default(),
+            rejected_last: false,
+        })
+    }
+
+    /// Current time [s].
+    pub fn time(&self) -> f64 {
+        self.t
+    }
+
+    /// Current state.
+    pub fn state(&self) -> State<f64> {
+        self.y
+    }
+
+    /// Current modes.
+    pub fn modes(&self) -> [Mode; 3] {
+        self.modes
+    }
+
+    /// The modes the last accepted step was taken in: those of its dense output (the current
+    /// modes differ after an event).
+    pub fn step_modes(&self) -> [Mode; 3] {
+        self.step_modes
+    }
+
+    /// Work done so far.
+    pub fn stats(&self) -> AdaptiveStats {
+        self.stats
+    }
+
+    /// The dense output of the last accepted step at time `t` [s] (clamped into that step;
+    /// before an event's reset). None before the first step.
+    pub fn dense(&self, t: f64) -> Option<State<f64>> {
+        let d = self.dense.as_ref()?;
+        let th = if d.h > 0.0 {
+            ((t - d.t0) / d.h).clamp(0.0, d.th_end)
+        } else {
+            0.0
+        };
+        Some(unpack(&d.state(th)))
+    }
+
+    /// The dense output of the last accepted step as a polynomial ([`DensePoly`]), for
+    /// sampling it at many times. None before the first step.
+    pub fn dense_poly(&self) -> Option<DensePoly> {
+        self.dense.as_ref().map(DensePoly::new)
+    }
+
+    fn eval(&mut self, y: &State<f64>, u: &[f64; 3]) -> Result<Eval<f64>, AdaptiveError> {
+        self.stats.evals += 1;
+        Ok(eval(&self.c, Law::Hybrid, y, &self.modes, u)?)
+    }
+
+    fn resolve(&mut self, u: [f64; 3]) -> Result<Eval<f64>, AdaptiveError> {
+        let u = saturate(u)?;
+        self.stats.evals += 1;
+        let stopped = self.modes.iter().filter(|m| **m == Mode::Stopped).count();
+        let e = resolve(&self.c, Law::Hybrid, &self.y, &u, &mut self.modes)?;
+        self.stats.evals += stopped as u64;
+        Ok(e)
+    }
+
+    fn trial(
+        &mut self,
+        h: f64,
+        e1: &Eval<f64>,
+        u: &mut impl FnMut(f64) -> [f64; 3],
+    ) -> Result<Trial, AdaptiveError> {
+        let y0 = pack(&self.y);
+        let mut k = [[0.0; 10]; 7];
+        let mut evals = [*e1; 7];
+        k[0] = deriv(&self.y, e1);
+        for s in 1..6 {
+            let mut ys = y0;
+            for (j, v) in ys.iter_mut().enumerate() {
+                let mut acc = 0.0;
+                for (a, kk) in A[s - 1].iter().zip(k.iter()).take(s) {
+                    acc += a * kk[j];
+                }
+                *v += h * acc;
+            }
+            let st = unpack(&ys);
+            let us = saturate(u(self.t + C[s] * h))?;
+            let e = self.eval(&st, &us)?;
+            k[s] = deriv(&st, &e);
+            evals[s] = e;
+        }
+        let mut yn = y0;
+        for (j, v) in yn.iter_mut().enumerate() {
+            let mut acc = 0.0;
+            for (b, kk) in B.iter().zip(k.iter()) {
+                acc += b * kk[j];
+            }
+            *v += h * acc;
+        }
+        let sn = unpack(&yn);
+        if !sn.is_finite() {
+            return Err(AdaptiveError::NonFinite);
+        }
+        let un = saturate(u(self.t + h))?;
+        let e7 = self.eval(&sn, &un)?;
+        k[6] = deriv(&sn, &e7);
+        evals[6] = e7;
+        let mut err = [0.0; 10];
+        for (j, e) in err.iter_mut().enumerate() {
+            let mut acc = 0.0;
+            for (w, kk) in E.iter().zip(k.iter()) {
+                acc += w * kk[j];
+            }
+            *e = h * acc;
+        }
+        Ok(Trial { k, yn, err, evals })
+    }
+
+    fn norm(&self, e: &Y, y0: &Y, y1: &Y) -> f64 {
+        let mut s = 0.0;
+        for j in 0..10 {
+            let sc = self.tol.atol + self.tol.rtol * libm::fabs(y0[j]).max(libm::fabs(y1[j]));
+            let r = e[j] / sc;
+            s += r * r;
+        }
+        libm::sqrt(s / 10.0)
+    }
+
+    /// Initial step (Hairer, Norsett & Wanner, II.4), from the size of `y` and `y'`.
+    fn initial_step(
+        &mut self,
+        e1: &Eval<f64>,
+        u: &mut impl FnMut(f64) -> [f64; 3],
+    ) -> Result<f64, AdaptiveError> {
+        let y = pack(&self.y);
+        let k1 = deriv(&self.y, e1);
+        let (mut d0, mut d1) = (0.0, 0.0);
+        for j in 0..10 {
+            let sc = self.tol.atol + self.tol.rtol * libm::fabs(y[j]);
+            d0 += (y[j] / sc) * (y[j] / sc);
+            d1 += (k1[j] / sc) * (k1[j] / sc);
+        }
+        let (d0, d1) = (libm::sqrt(d0 / 10.0), libm::sqrt(d1 / 10.0));
+        let h0 = if d0 < 1e-5 || d1 < 1e-5 {
+            1e-6
+        } else {
+            0.01 * d0 / d1
+        };
+        let mut y1 = y;
+        for (v, k) in y1.iter_mut().zip(k1) {
+            *v += h0 * k;
+        }
+        let s1 = unpack(&y1);
+        let u1 = saturate(u(self.t + h0))?;
+        let e = self.eval(&s1, &u1)?;
+        let f1 = deriv(&s1, &e);
+        let mut d2 = 0.0;
+        for j in 0..10 {
+            let sc = self.tol.atol + self.tol.rtol * libm::fabs(y[j]);
+            d2 += ((f1[j] - k1[j]) / sc) * ((f1[j] - k1[j]) / sc);
+        }
+        let d2 = libm::sqrt(d2 / 10.0) / h0;
+        let m = d1.max(d2);
+        let h1 = if m <= 1e-15 {
+            (h0 * 1e-3).max(1e-6)
+        } else {
+            libm::pow(0.01 / m, 0.2)
+        };
+        Ok((100.0 * h0).min(h1).min(self.tol.hmax))
+    }
+
+    /// The earliest event in the trial step of length `h` (fraction of `h`, kind, axis).
+    fn find_event(
+        &mut self,
+        h: f64,
+        tr: &Trial,
+        u: &mut impl FnMut(f64) -> [f64; 3],
+    ) -> Result<Option<(f64, EventKind, usize)>, AdaptiveError> {
+        let d = Dense {
+            t0: self.t,
+            h,
+            th_end: 1.0,
+            y0: pack(&self.y),
+            k: tr.k,
+        };
+        let mut first: Option<(f64, EventKind, usize)> = None;
+        let mut consider = |th: f64, k: EventKind, i: usize| {
+            if first.is_none_or(|(b, _, _)| th < b) {
+                first = Some((th, k, i));
+            }
+        };
+        for i in 0..3 {
+            let mode = self.modes[i];
+            let (min, max) = (self.c.axes[i].min, self.c.axes[i].max);
+            if mode == Mode::Stopped {
+                // Breakaway: the margin at the stages (in time order), then bisection on the
+                // margin at the dense state.
+                let ax = self.c.axes[i];
+                let q = self.y.q[i];
+                let mut prev = 0.0;
+                let mut found = None;
+                for s in [1usize, 2, 3, 4, 6] {
+                    if let Some((dir, _)) = candidate(&ax, q, tr.evals[s].hold[i]) {
+                        found = Some((prev, C[s], dir));
+                        break;
+                    }
+                    prev = C[s];
+                }
+                if let Some((lo, hi, dir)) = found {
+                    let (t0, c, modes) = (self.t, &self.c, &self.modes);
+                    let mut n = 0;
+                    let th = bisect(h, self.tol.event, lo, hi, |th| {
+                        let st = unpack(&d.state(th));
+                        let us = saturate(u(t0 + th * h))?;
+                        n += 1;
+                        let e = eval(c, Law::Hybrid, &st, modes, &us)?;
+                        Ok(margin(&ax, q, e.hold[i], dir) > 0.0)
+                    })?;
+                    self.stats.evals += n;
+                    consider(th, EventKind::Breakaway, i);
+                }
+                continue;
+            }
+            for kind in [EventKind::Velocity, EventKind::Limit] {
+                let hit = |th: f64| match kind {
+                    EventKind::Velocity => velocity_violated(mode, d.component(5 + i, th)),
+                    _ => limit_violated(mode, d.component(i, th), min, max),
+                };
+                let mut prev = 0.0;
+                for n in 1..=EVENT_SAMPLES {
+                    let th = n as f64 / EVENT_SAMPLES as f64;
+                    if hit(th) {
+                        let th = bisect(h, self.tol.event, prev, th, |t| Ok(hit(t)))?;
+                        consider(th, kind, i);
+                        break;
+                    }
+                    prev = th;
+                }
+            }
+        }
+        Ok(first)
+    }
+
+    /// Takes one accepted step, not past `t_end`, with the input `u(t)` [V] (saturated to
+    /// +-12 V here). Returns what the step covered; the dense output ([`Adaptive::dense`])
+    /// then covers it. At `t_end` already, returns a step of length 0.
+    pub fn step(
+        &mut self,
+        t_end: f64,
+        u: &mut impl FnMut(f64) -> [f64; 3],
+    ) -> Result<StepInfo, AdaptiveError> {
+        let t0 = self.t;
+        if t_end <= t0 {
+            return Ok(StepInfo {
+                t0,
+                t1: t0,
+                event: None,
+            });
+        }
+        let e1 = match self.e1 {
+            Some(e) => e,
+            None => {
+                let e = self.resolve(u(t0))?;
+                self.h = self.initial_step(&e, u)?;
+                self.e1 = Some(e);
+                e
+            }
+        };
+        loop {
+            let remaining = t_end - self.t;
+            let mut h = self.h.min(self.tol.hmax);
+            let last = h >= remaining;
+            if last {
+                h = remaining;
+            }
+            if h <= 16.0 * f64::EPSILON * self.t.abs().max(1.0) {
+                return Err(AdaptiveError::StepTooSmall);
+            }
+            let tr = self.trial(h, &e1, u)?;
+            let y0 = pack(&self.y);
+            let err = self.norm(&tr.err, &y0, &tr.yn);
+            let accept = err <= 1.0; // false for NaN too
+            if !accept {
+                self.stats.rejected += 1;
+                let fac = if err.is_finite() {
+                    (0.9 * libm::pow(err, -0.2)).max(0.2)
+                } else {
+                    0.2
+                };
+                self.h = h * fac.min(1.0);
+                self.rejected_last = true;
+                continue;
+            }
+            let fac = if err == 0.0 {
+                5.0
+            } else {
+                (0.9 * libm::pow(err, -0.2)).clamp(0.2, 5.0)
+            };
+            let next = h * if self.rejected_last {
+                fac.min(1.0)
+            } else {
+                fac
+            };
+            self.rejected_last = false;
+            self.stats.accepted += 1;
+            self.step_modes = self.modes;
+            let event = self.find_event(h, &tr, u)?;
+            let Some((th, kind, i)) = event else {
+                self.dense = Some(Dense {
+                    t0,
+                    h,
+                    th_end: 1.0,
+                    y0,
+                    k: tr.k,
+                });
+                self.t = if last { t_end } else { self.t + h };
+                self.y = unpack(&tr.yn);
+                self.e1 = Some(tr.evals[6]);
+                if !last || next > self.h {
+                    self.h = next;
+                }
+                return Ok(StepInfo {
+                    t0,
+                    t1: self.t,
+                    event: None,
+                });
+            };
+            // The state at the event from the dense output (where the event was located), then
+            // the reset and the modes re-resolved; the next step starts there.
+            let s = th * h;
+            let d = Dense {
+                t0,
+                h,
+                th_end: th,
+                y0,
+                k: tr.k,
+            };
+            let ye = d.state(th);
+            self.dense = Some(d);
+            let mut y = unpack(&ye);
+            match kind {
+                EventKind::Velocity => stop_velocity(&self.c, &mut y, &mut self.modes, i),
+                EventKind::Limit => stop_limit(&self.c, &mut y, &mut self.modes, i)?,
+                EventKind::Breakaway => {}
+            }
+            sweep(&self.c, &mut y, &mut self.modes)?;
+            self.y = y;
+            self.t += s;
+            self.stats.events += 1;
+            let e = self.resolve(u(self.t))?;
+            self.e1 = Some(e);
+            // Keep the controller's step (the event cut the step, not the error).
+            self.h = next.max(h);
+            return Ok(StepInfo {
+                t0,
+                t1: self.t,
+                event: Some((kind, i)),
+            });
+        }
+    }
+}
+
+/// Total mechanical energy [J] of state `y`: kinetic `qd^T M(q) qd / 2` plus the payload's
+/// potential energy `-m_p g L sin(alpha) cos(beta)` (zero at the trolley's height). Friction
+/// and damping can only lower it.
+pub fn energy(c: &Coeffs<f64>, y: &State<f64>) -> f64 {
+    let pre = at_state(c, y);
+    let mut kin = 0.0;
+    for i in 0..5 {
+        for j in 0..5 {
+            kin += y.qd[i] * pre.m[i][j] * y.qd[j];
+        }
+    }
+    let [_, _, l, a, b] = y.q;
+    0.5 * kin - c.mpg * l * libm::sin(a) * libm::cos(b)
+}

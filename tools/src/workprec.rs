@@ -1,0 +1,447 @@
+//! Work-precision: wall time against the error of the compared velocity, per setting, as
+//! ODE-solver benchmarks draw it (log-log), for one case.
+//!
+//! Series (each point one whole run, timed as [`crate::study::time_best`]; error is the RMSE
+//! of the compared velocity on the 1 ms grid against the 10 us hybrid reference):
+//! - hybrid, fixed step ([`crate::reference::hybrid`]): a ladder of steps 200 ms .. 0.1 ms;
+//! - hybrid, adaptive ([`crate::adaptive_run`], Dormand-Prince 5(4) with located events): a
+//!   ladder of tolerances `rtol` 1e-3 .. 1e-10 (`atol = rtol / 100`);
+//! - `tanh(gamma v)`, gamma = 1e2 .. 1e6, under [`crate::ode45`] (Dormand-Prince 5(4)) and
+//!   under [`crate::ode23s`] (Rosenbrock 2(3), stiff), tolerances `rtol` 1e-3 .. 1e-8
+//!   (`atol = rtol / 100`), loosest first; a series stops after a run longer than
+//!   [`Options::series_cap`] (2 s).
+//!
+//! [`compare`] then takes, at every error level 1e-3 .. 1e-8 m/s, the fastest hybrid setting
+//! and the fastest `tanh` setting (any gamma, per solver) whose error is at most that level.
+
+use crate::adaptive_run::{hybrid_adaptive, tolerances};
+use crate::cases::Case;
+use crate::error::{Error, Result};
+use crate::output::Outputs;
+use crate::reference::{self, Trajectory};
+use crate::study::{tanh_name, tanh_ode45, time_best};
+use crate::{ode23s, ode45};
+use plotters::prelude::*;
+use serde::Serialize;
+use std::path::Path;
+
+/// Which integrator and model a point belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum Method {
+    /// Hybrid model, fixed-step RK4 with located events (setting: step [s]).
+    HybridFixed,
+    /// Hybrid model, adaptive DP45 with located events (setting: rtol).
+    HybridAdaptive,
+    /// `tanh` model under Dormand-Prince 5(4) (setting: rtol).
+    TanhDp45,
+    /// `tanh` model under the Rosenbrock 2(3) stiff solver (setting: rtol).
+    TanhRosenbrock,
+}
+
+impl Method {
+    /// Short label.
+    pub fn label(self) -> &'static str {
+        match self {
+            Method::HybridFixed => "hybrid fixed-step",
+            Method::HybridAdaptive => "hybrid adaptive DP45",
+            Method::TanhDp45 => "DP45",
+            Method::TanhRosenbrock => "Rosenbrock 2(3)",
+        }
+    }
+
+    /// A hybrid-model method.
+    pub fn is_hybrid(self) -> bool {
+        matches!(self, Method::HybridFixed | Method::HybridAdaptive)
+    }
+}
+
+/// One run of the diagram.
+#[derive(Clone, Debug, Serialize)]
+pub struct Point {
+    /// Method.
+    pub method: Method,
+    /// `gamma` [s/m] of a `tanh` model.
+    pub gamma: Option<f64>,
+    /// Step [s] (fixed) or `rtol` (adaptive).
+    pub setting: f64,
+    /// Wall time of the run [s] (fastest of repeated runs).
+    pub time_s: f64,
+    /// RMSE of the compared velocity [m/s].
+    pub rmse: f64,
+    /// Accepted steps.
+    pub steps: u64,
+}
+
+/// Fixed steps of the hybrid ladder [s].
+pub const HYBRID_STEPS: [f64; 15] = [
+    0.2, 0.1, 0.05, 0.04, 0.025, 0.02, 0.01, 0.005, 0.004, 0.002, 0.001, 5e-4, 2e-4, 1e-4, 5e-5,
+];
+/// Tolerances of the hybrid adaptive ladder.
+pub const HYBRID_RTOLS: [f64; 8] = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10];
+/// The `tanh` gammas [s/m].
+pub const TANH_GAMMAS: [f64; 5] = [1e2, 1e3, 1e4, 1e5, 1e6];
+/// Tolerances of the `tanh` ladders.
+pub const TANH_RTOLS: [f64; 6] = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8];
+/// Error levels [m/s] of the comparison.
+pub const LEVELS: [f64; 6] = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8];
+
+/// Options of the sweep.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// Timing budget per point [s] (see [`time_best`]).
+    pub budget: f64,
+    /// Runs longer than this [s] are timed once.
+    pub single_above: f64,
+    /// A `tanh` series (one gamma, one solver) stops after a run longer than this [s]: the
+    /// tighter tolerances after it cost more (gamma 1e6 under DP45 at rtol 1e-6: 42 s on the
+    /// study's machine) without lowering the error below the model's own smoothing error.
+    pub series_cap: f64,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            budget: 0.2,
+            single_above: 0.2,
+            series_cap: 2.0,
+        }
+    }
+}
+
+fn timed<T>(o: &Options, mut f: impl FnMut() -> Result<T>) -> Result<(f64, T)> {
+    let t0 = std::time::Instant::now();
+    let first = f()?;
+    let once = t0.elapsed().as_secs_f64();
+    if once > o.single_above {
+        return Ok((once, first));
+    }
+    let (t, r) = time_best(o.budget, f)?;
+    Ok((t.min(once), r))
+}
+
+/// A `tanh` model of the case under the Rosenbrock 2(3) solver.
+pub fn tanh_rosenbrock(
+    case: &Case,
+    gamma: f64,
+    opts: &ode45::Options,
+) -> Result<(Trajectory, ode45::Stats)> {
+    use crate::smooth::{pack, unpack, Friction, Smooth};
+    let sys = Smooth::new(&case.params, Friction::Tanh(gamma), case.held);
+    let n = case.samples();
+    let mut tr = Trajectory {
+        h: 0.0,
+        stride: 1,
+        states: Vec::with_capacity(n + 1),
+        ..Trajectory::default()
+    };
+    tr.states.push(case.init);
+    let stats = ode23s::integrate(
+        |t, y| sys.rhs(y, &case.u_at(t)).ok(),
+        0.0,
+        pack(&case.init),
+        case.sample,
+        n,
+        opts,
+        |_, _, y| tr.states.push(unpack(y)),
+    )
+    .map_err(|e| Error::Rosenbrock {
+        gamma,
+        failure: e.to_string(),
+    })?;
+    tr.steps = stats.accepted;
+    Ok((tr, stats))
+}
+
+fn tanh_opts(rtol: f64) -> ode45::Options {
+    ode45::Options {
+        rtol,
+        atol: rtol * 1e-2,
+        hmax: f64::INFINITY,
+    }
+}
+
+/// Runs every series of the diagram for `case` against `refr`.
+pub fn sweep(
+    case: &Case,
+    refr: &Trajectory,
+    o: &Options,
+    mut progress: impl FnMut(&str),
+) -> Result<Vec<Point>> {
+    let mut pts = Vec::new();
+    progress(&format!("{}: work-precision, hybrid fixed step", case.name));
+    for &h in &HYBRID_STEPS {
+        let (t, tr) = timed(o, || reference::hybrid(case, h, false))?;
+        pts.push(Point {
+            method: Method::HybridFixed,
+            gamma: None,
+            setting: h,
+            time_s: t,
+            rmse: reference::rmse(case, &tr, refr),
+            steps: tr.steps,
+        });
+    }
+    progress(&format!("{}: work-precision, hybrid adaptive", case.name));
+    for &rtol in &HYBRID_RTOLS {
+        let tol = tolerances(case, rtol);
+        let (t, (tr, st)) = timed(o, || hybrid_adaptive(case, &tol))?;
+        pts.push(Point {
+            method: Method::HybridAdaptive,
+            gamma: None,
+            setting: rtol,
+            time_s: t,
+            rmse: reference::rmse(case, &tr, refr),
+            steps: st.accepted,
+        });
+    }
+    for &g in &TANH_GAMMAS {
+        progress(&format!("{}: work-precision, {}", case.name, tanh_name(g)));
+        for method in [Method::TanhRosenbrock, Method::TanhDp45] {
+            for &rtol in &TANH_RTOLS {
+                let opts = tanh_opts(rtol);
+                let (t, (tr, st)) = if method == Method::TanhDp45 {
+                    timed(o, || tanh_ode45(case, g, &opts))?
+                } else {
+                    timed(o, || tanh_rosenbrock(case, g, &opts))?
+                };
+                pts.push(Point {
+                    method,
+                    gamma: Some(g),
+                    setting: rtol,
+                    time_s: t,
+                    rmse: reference::rmse(case, &tr, refr),
+                    steps: st.accepted,
+                });
+                if t > o.series_cap {
+                    break;
+                }
+            }
+        }
+    }
+    Ok(pts)
+}
+
+/// The comparison at one error level.
+#[derive(Clone, Debug, Serialize)]
+pub struct Level {
+    /// Error level [m/s].
+    pub level: f64,
+    /// Fastest hybrid point reaching it.
+    pub hybrid: Option<Point>,
+    /// Fastest `tanh` point under DP45 reaching it.
+    pub tanh_dp45: Option<Point>,
+    /// Fastest `tanh` point under the Rosenbrock solver reaching it.
+    pub tanh_rosenbrock: Option<Point>,
+    /// `min(tanh times) / hybrid time`, where both reach the level.
+    pub speedup: Option<f64>,
+}
+
+fn fastest<'a>(pts: impl Iterator<Item = &'a Point>, level: f64) -> Option<Point> {
+    pts.filter(|p| p.rmse <= level && p.rmse.is_finite())
+        .min_by(|a, b| a.time_s.total_cmp(&b.time_s))
+        .cloned()
+}
+
+/// At every level of [`LEVELS`]: the fastest hybrid and `tanh` settings reaching it.
+pub fn compare(pts: &[Point]) -> Vec<Level> {
+    LEVELS
+        .iter()
+        .map(|&level| {
+            let hybrid = fastest(pts.iter().filter(|p| p.method.is_hybrid()), level);
+            let dp = fastest(pts.iter().filter(|p| p.method == Method::TanhDp45), level);
+            let ro = fastest(
+                pts.iter().filter(|p| p.method == Method::TanhRosenbrock),
+                level,
+            );
+            let best_tanh = [&dp, &ro]
+                .iter()
+                .filter_map(|p| p.as_ref().map(|p| p.time_s))
+                .fold(f64::INFINITY, f64::min);
+            let speedup = hybrid
+                .as_ref()
+                .filter(|_| best_tanh.is_finite())
+                .map(|h| best_tanh / h.time_s);
+            Level {
+                level,
+                hybrid,
+                tanh_dp45: dp,
+                tanh_rosenbrock: ro,
+                speedup,
+            }
+        })
+        .collect()
+}
+
+/// Name of a point's setting, e.g. `h = 10 ms`, `rtol = 1e-6`.
+pub fn setting_name(p: &Point) -> String {
+    let s = match p.method {
+        Method::HybridFixed => format!("h = {} ms", crate::study::fmt_g(p.setting * 1e3)),
+        _ => format!("rtol = {:.0e}", p.setting),
+    };
+    match p.gamma {
+        Some(g) => format!("{} {} {s}", tanh_name(g), p.method.label()),
+        None => format!("{} {s}", p.method.label()),
+    }
+}
+
+/// The comparison as text.
+pub fn table(name: &str, levels: &[Level]) -> String {
+    let mut s = format!(
+        "{name}: fastest setting reaching each error level (RMSE of the compared velocity)\n"
+    );
+    s.push_str(&format!(
+        "{:>8} | {:>44} | {:>44} | {:>44} | {:>8}\n",
+        "level", "hybrid", "tanh DP45", "tanh Rosenbrock 2(3)", "speed-up"
+    ));
+    let cell = |p: &Option<Point>| match p {
+        Some(p) => format!("{} ({} s)", setting_name(p), crate::study::fmt_g(p.time_s)),
+        None => "not reached".into(),
+    };
+    for l in levels {
+        s.push_str(&format!(
+            "{:>8.0e} | {:>44} | {:>44} | {:>44} | {:>8}\n",
+            l.level,
+            cell(&l.hybrid),
+            cell(&l.tanh_dp45),
+            cell(&l.tanh_rosenbrock),
+            l.speedup
+                .map(|x| format!("{}x", crate::study::fmt_g(x)))
+                .unwrap_or_else(|| "-".into())
+        ));
+    }
+    s
+}
+
+type Dyn = Box<dyn std::error::Error>;
+
+/// Draws the work-precision diagram (time against error, log-log) of one case as SVG into
+/// `path` (atomically, under the policy `outputs`).
+pub fn diagram(
+    path: &Path,
+    title: &str,
+    pts: &[Point],
+    levels: &[Level],
+    outputs: &Outputs,
+) -> Result<()> {
+    let mut svg = String::new();
+    draw(&mut svg, title, pts, levels).map_err(|e| Error::Plot {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    outputs.write(path, svg)?;
+    Ok(())
+}
+
+fn draw(
+    svg: &mut String,
+    title: &str,
+    pts: &[Point],
+    levels: &[Level],
+) -> std::result::Result<(), Dyn> {
+    let ok: Vec<&Point> = pts
+        .iter()
+        .filter(|p| p.rmse.is_finite() && p.rmse > 0.0 && p.time_s > 0.0)
+        .collect();
+    let (mut elo, mut ehi, mut tlo, mut thi) = (1e-9f64, 1e-2f64, f64::INFINITY, 0.0f64);
+    for p in &ok {
+        elo = elo.min(p.rmse);
+        ehi = ehi.max(p.rmse);
+        tlo = tlo.min(p.time_s);
+        thi = thi.max(p.time_s);
+    }
+    let (elo, ehi) = (elo / 2.0, ehi * 2.0);
+    let (tlo, thi) = (tlo / 2.0, thi * 2.0);
+    let root = SVGBackend::with_string(svg, (1000, 750)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let mut ch = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(45)
+        .y_label_area_size(70)
+        .build_cartesian_2d((elo..ehi).log_scale(), (tlo..thi).log_scale())?;
+    ch.configure_mesh()
+        .x_desc("RMSE of the compared velocity against the 10 us reference [m/s]")
+        .y_desc("wall time of the run [s]")
+        .x_label_formatter(&|v| format!("{v:.0e}"))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .draw()?;
+    // (label, colour, points, bold)
+    type Series = (String, RGBColor, Vec<(f64, f64)>, bool);
+    let mut series: Vec<Series> = Vec::new();
+    let line = |m: Method, g: Option<f64>| -> Vec<(f64, f64)> {
+        let mut v: Vec<(f64, f64)> = ok
+            .iter()
+            .filter(|p| p.method == m && p.gamma == g)
+            .map(|p| (p.rmse, p.time_s))
+            .collect();
+        v.sort_by(|a, b| a.0.total_cmp(&b.0));
+        v
+    };
+    series.push((
+        "hybrid fixed step (200 ms .. 0.05 ms)".into(),
+        RGBColor(0, 0, 0),
+        line(Method::HybridFixed, None),
+        true,
+    ));
+    series.push((
+        "hybrid adaptive DP45 (rtol 1e-3 .. 1e-10)".into(),
+        RGBColor(200, 0, 0),
+        line(Method::HybridAdaptive, None),
+        true,
+    ));
+    let blues = [
+        RGBColor(120, 170, 255),
+        RGBColor(70, 120, 230),
+        RGBColor(30, 70, 200),
+        RGBColor(10, 40, 150),
+        RGBColor(0, 10, 90),
+    ];
+    let greens = [
+        RGBColor(120, 220, 120),
+        RGBColor(60, 180, 60),
+        RGBColor(20, 140, 20),
+        RGBColor(0, 100, 0),
+        RGBColor(0, 60, 0),
+    ];
+    for (k, &g) in TANH_GAMMAS.iter().enumerate() {
+        series.push((
+            format!("{} DP45", tanh_name(g)),
+            blues[k % 5],
+            line(Method::TanhDp45, Some(g)),
+            false,
+        ));
+        series.push((
+            format!("{} Rosenbrock 2(3)", tanh_name(g)),
+            greens[k % 5],
+            line(Method::TanhRosenbrock, Some(g)),
+            false,
+        ));
+    }
+    for (name, col, v, bold) in series {
+        if v.is_empty() {
+            continue;
+        }
+        let w = if bold { 3 } else { 1 };
+        ch.draw_series(LineSeries::new(v.clone(), col.stroke_width(w)))?
+            .label(name)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], col.stroke_width(3)));
+        ch.draw_series(v.iter().map(|&(x, y)| Circle::new((x, y), 3, col.filled())))?;
+    }
+    // The comparison: the speed-up at each level where both reach it.
+    for l in levels {
+        if let (Some(h), Some(s)) = (&l.hybrid, l.speedup) {
+            ch.draw_series(std::iter::once(Text::new(
+                format!("{}x", crate::study::fmt_g(s)),
+                (l.level, h.time_s / 1.6),
+                ("sans-serif", 13).into_font().color(&RGBColor(200, 0, 0)),
+            )))?;
+        }
+    }
+    ch.configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 12))
+        .draw()?;
+    root.present()?;
+    Ok(())
+}
