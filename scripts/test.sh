@@ -4,7 +4,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-step() { printf '\n==> %s\n' "$*"; }
+step() { printf '\n==> [%ss] %s\n' "$SECONDS" "$*"; }
 
 step "toolchain parts"
 rustup target add thumbv7em-none-eabihf
@@ -100,3 +100,5 @@ PATH="$venv/bin:$PATH" "$venv/bin/python" -m pip install -q --disable-pip-versio
   --no-build-isolation ./python
 RAY_USAGE_STATS_ENABLED=0 "$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests
 # ---- end python ----------------------------------------------------------------------------
+
+step "done"
