@@ -39,7 +39,78 @@ struct Part {
 
 const MAXD: usize = 12;
 
+/// Shortest stretch at rest that is cut out of the inverse-dynamics rows [s]: far longer than
+/// a reversal takes (EMPS has none over 7 ms), so only an axis that really holds still is cut.
+pub const REST_MIN_S: f64 = 0.2;
+
+/// The moving parts of `range`: the run without its stretches at rest (the position stays
+/// within two encoder steps over +-0.05 s, for at least [`REST_MIN_S`] and 20 samples).
+/// A resting axis carries no sign of velocity for the least squares: its force only says
+/// that friction held it, which the inverse-dynamics rows cannot express. Moving parts too
+/// short for the zero-phase filter (`< 4 drop_start + 50` samples) are left out too.
+fn moving_parts(
+    run: &AxisRun,
+    range: std::ops::Range<usize>,
+    opt: &IdimOptions,
+) -> Vec<std::ops::Range<usize>> {
+    let x = &run.x[range.clone()];
+    let n = x.len();
+    let dt = run.dt();
+    let quantum = x
+        .windows(2)
+        .map(|w| (w[1] - w[0]).abs())
+        .filter(|d| *d > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    if n == 0 || !quantum.is_finite() || dt.is_nan() || dt <= 0.0 {
+        return vec![range];
+    }
+    let k = ((0.05 / dt).round() as usize).max(5);
+    let still: Vec<bool> = (0..n)
+        .map(|i| {
+            let w = &x[i.saturating_sub(k)..(i + k + 1).min(n)];
+            let (lo, hi) = w
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+                    (l.min(v), h.max(v))
+                });
+            hi - lo <= 2.0 * quantum
+        })
+        .collect();
+    let min_rest = ((REST_MIN_S / dt).ceil() as usize).max(20);
+    let min_part = 4 * opt.drop_start + 50;
+    let mut parts = Vec::new();
+    let mut start = 0usize;
+    let mut i = 0usize;
+    while i < n {
+        if still[i] {
+            let j = (i..n).find(|&j| !still[j]).unwrap_or(n);
+            if j - i >= min_rest {
+                // the +-k window: the k samples on either side of the still stretch lie within
+                // two encoder steps of it too, so they rest as well
+                let (a, b) = (i.saturating_sub(k), (j + k).min(n));
+                if a > start && a - start >= min_part {
+                    parts.push(range.start + start..range.start + a);
+                }
+                start = b;
+            }
+            i = j;
+        } else {
+            i += 1;
+        }
+    }
+    if n - start >= min_part {
+        parts.push(range.start + start..range.start + n);
+    }
+    parts
+}
+
 fn append(part: &mut Part, run: &AxisRun, range: std::ops::Range<usize>, opt: &IdimOptions) {
+    for piece in moving_parts(run, range, opt) {
+        append_part(part, run, piece, opt);
+    }
+}
+
+fn append_part(part: &mut Part, run: &AxisRun, range: std::ops::Range<usize>, opt: &IdimOptions) {
     let sub = run.slice(range);
     let p = process(&sub, opt);
     let r = opt.decimation;

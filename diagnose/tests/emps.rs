@@ -154,3 +154,49 @@ fn emps_closed_loop_plots_are_written() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// EMPS with 8 s at rest under 0.5 V appended to the fitting run: a resting axis is not an
+/// inverse-dynamics row with the sign of a noisy velocity, so neither the baseline nor the
+/// verdict moves (it used to turn into `input_deadzone` 0.30 V and double the baseline error).
+#[test]
+fn emps_with_a_long_rest_keeps_its_baseline_and_verdict() {
+    if crane_ident::shared_data::require("emps").is_none() {
+        return;
+    }
+    let plain = emps();
+    let mut rested = plain.clone();
+    let crane_ident::data::Samples::Axis(a) = &mut rested.runs[0].samples else {
+        panic!("EMPS runs are single-axis runs");
+    };
+    let dt = a.dt();
+    let (t_end, x_end) = (*a.t.last().unwrap(), *a.x.last().unwrap());
+    for k in 1..=8000 {
+        a.t.push(t_end + k as f64 * dt);
+        a.x.push(x_end);
+        a.u.push(0.5);
+        a.force.push(0.5 * GTAU);
+        if let Some(c) = a.closed_loop.as_mut() {
+            let r = *c.reference.last().unwrap();
+            c.reference.push(r);
+            c.added_input.push(0.0);
+        }
+    }
+    for baseline in [Baseline::Auto, Baseline::Symmetric] {
+        let before = diagnose_dataset(&plain, &opts(baseline.clone())).unwrap();
+        let after = diagnose_dataset(&rested, &opts(baseline.clone())).unwrap();
+        let fit = |r: &crane_diagnose::Report| r.measures["force_rel_err_fit_pct"];
+        eprintln!(
+            "{baseline:?}: fit error {:.3} % -> {:.3} % with the rest, verdict {} -> {}",
+            fit(&before),
+            fit(&after),
+            before.verdict,
+            after.verdict
+        );
+        assert_eq!(before.verdict, after.verdict);
+        assert!((fit(&after) - fit(&before)).abs() < 0.05 * fit(&before));
+        assert!(after
+            .findings
+            .iter()
+            .all(|f| f.cause != crane_diagnose::Cause::InputDeadzone));
+    }
+}
