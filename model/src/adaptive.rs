@@ -14,8 +14,9 @@
 //!   the steps then grow freely (up to [`Tolerances::hmax`]).
 //! - Events, on every accepted trial step: a moving axis's velocity reaching 0 and its
 //!   position reaching the limit it moves towards are found on the dense output (sampled at
-//!   eight points of the step, then bisection), a stopped axis's breakaway by its margin at
-//!   the stage evaluations, then bisection on the margin evaluated at the dense state. All
+//!   eight points of the step, then the crossing located), a stopped axis's breakaway by its
+//!   margin at the stage evaluations, then the crossing of the margin evaluated at the dense
+//!   state (the ITP method: regula falsi with bisection's worst case). All
 //!   are located to [`Tolerances::event`] seconds. The state at the earliest event is taken
 //!   from the dense output (where the event was located), the reset applied (the
 //!   resets of `NUMERICS.md`: velocity `qd := 0`, limit end-stop impulse), every other
@@ -179,8 +180,9 @@ const BI: [[f64; 4]; 7] = [
 ];
 /// Dense-output samples per step for finding velocity and limit events.
 const EVENT_SAMPLES: usize = 8;
-/// Bisection iterations at most when locating an event.
-const MAX_BISECTIONS: usize = 60;
+/// Evaluations at most when locating an event (`locate`): past bisection's count for any
+/// bracket of fractions of a step and any tolerance that is not denormal.
+const MAX_LOCATE: usize = 100;
 
 fn join(a: &[f64; 5], b: &[f64; 5]) -> Y {
     let [a0, a1, a2, a3, a4] = *a;
@@ -226,24 +228,70 @@ fn dense_weights(th: f64) -> [f64; 7] {
     w
 }
 
-/// Bisection on `th` in `(lo, hi]`: the first point where `hit` holds (`hit(hi)` is true),
-/// to `tol` seconds on a step of length `h`.
-fn bisect(
+/// The first point in `(lo, hi]` where an event function crosses into its violated side, to
+/// `tol` seconds on a step of length `h` (fractions of the step in, fraction out).
+///
+/// `f(th)` returns whether the event has happened at `th` and a signed value `g` of the
+/// event function, `g >= 0` where it has (the side is decided by the flag, so a value that
+/// rounds to the wrong sign cannot mislead the bracket). `f(lo)` must be false and `f(hi)`
+/// true, `g_lo <= 0 <= g_hi` their values.
+///
+/// The ITP method (interpolate, truncate, project: Oliveira & Takahashi, ACM TOMS 47(1), 2020)
+/// with `k1 = 0.2 / (hi - lo)`, `k2 = 2`, `n0 = 1`: regula falsi on a smooth `g`
+/// (superlinear, typically 4-8 evaluations to 1e-10 s), never more than one evaluation over
+/// bisection's `ceil(log2((hi - lo) h / tol))` whatever `g` does, and at most [`MAX_LOCATE`].
+fn locate(
     h: f64,
     tol: f64,
-    mut lo: f64,
-    mut hi: f64,
-    mut hit: impl FnMut(f64) -> Result<bool, AdaptiveError>,
+    (mut lo, mut g_lo): (f64, f64),
+    (mut hi, mut g_hi): (f64, f64),
+    mut f: impl FnMut(f64) -> Result<(bool, f64), AdaptiveError>,
 ) -> Result<f64, AdaptiveError> {
-    for _ in 0..MAX_BISECTIONS {
-        if (hi - lo) * h <= tol {
+    let eps = 0.5 * tol / h;
+    let w0 = hi - lo;
+    // Already to tolerance (or a NaN bracket, which the loop could not shrink).
+    if w0.partial_cmp(&(2.0 * eps)) != Some(core::cmp::Ordering::Greater) {
+        return Ok(hi);
+    }
+    let k1 = 0.2 / w0;
+    let n_half = libm::ceil(libm::log2(w0 / (2.0 * eps))).min(MAX_LOCATE as f64 - 1.0);
+    // `eps 2^(n_max - j)`: the projection radius's budget, halved every iteration.
+    let mut budget = eps * libm::exp2(n_half + 1.0);
+    for _ in 0..MAX_LOCATE {
+        let w = hi - lo;
+        if w <= 2.0 * eps {
             break;
         }
-        let mid = 0.5 * (lo + hi);
-        if hit(mid)? {
-            hi = mid;
+        let mid = lo + 0.5 * w;
+        // Interpolation (regula falsi), where the values allow it; else the midpoint.
+        let falsi = if g_lo < 0.0 && g_hi > 0.0 {
+            (g_hi * lo - g_lo * hi) / (g_hi - g_lo)
         } else {
-            lo = mid;
+            mid
+        };
+        // Truncation towards the midpoint by `k1 w^2`, then projection into the ball of
+        // radius `r` around it that keeps the worst case of bisection.
+        let sigma = if mid >= falsi { 1.0 } else { -1.0 };
+        let delta = k1 * w * w;
+        let trunc = if delta <= libm::fabs(mid - falsi) {
+            falsi + sigma * delta
+        } else {
+            mid
+        };
+        let r = (budget - 0.5 * w).max(0.0);
+        let x = if libm::fabs(trunc - mid) <= r {
+            trunc
+        } else {
+            mid - sigma * r
+        };
+        budget *= 0.5;
+        let (hit, g) = f(x)?;
+        if hit {
+            hi = x;
+            g_hi = g.max(0.0);
+        } else {
+            lo = x;
+            g_lo = g.min(0.0);
         }
     }
     Ok(hi)
@@ -286,11 +334,13 @@ impl Dense {
 }
 
 /// The dense output of one accepted step as a polynomial in `th = (t - t0) / h`: cheap to
-/// evaluate at many times (a Horner scheme of degree 4 per component).
+/// evaluate at many times (degree 4 per component, by Estrin's scheme: 4 multiplications and
+/// 4 additions per component).
 #[derive(Clone, Copy, Debug)]
 pub struct DensePoly {
     t0: f64,
-    h: f64,
+    /// `1 / h` [1/s] (0 for a step of length 0).
+    inv_h: f64,
     th_end: f64,
     y0: Y,
     c: [Y; 4],
@@ -310,7 +360,7 @@ impl DensePoly {
         }
         DensePoly {
             t0: d.t0,
-            h: d.h,
+            inv_h: if d.h > 0.0 { 1.0 / d.h } else { 0.0 },
             th_end: d.th_end,
             y0: d.y0,
             c,
@@ -318,16 +368,15 @@ impl DensePoly {
     }
 
     /// The state at time `t` [s], clamped into the step (before an event's reset).
+    #[inline]
     pub fn at(&self, t: f64) -> State<f64> {
-        let th = if self.h > 0.0 {
-            ((t - self.t0) / self.h).clamp(0.0, self.th_end)
-        } else {
-            0.0
-        };
+        let th = ((t - self.t0) * self.inv_h).max(0.0).min(self.th_end);
         let mut y = self.y0;
         let [c0, c1, c2, c3] = &self.c;
+        // Estrin's scheme: a shorter dependency chain than Horner's.
+        let th2 = th * th;
         for (j, v) in y.iter_mut().enumerate() {
-            *v += th * (c0[j] + th * (c1[j] + th * (c2[j] + th * c3[j])));
+            *v += th * ((c0[j] + th * c1[j]) + th2 * (c2[j] + th * c3[j]));
         }
         unpack(&y)
     }
@@ -423,7 +472,7 @@ impl Adaptive {
     pub fn dense(&self, t: f64) -> Option<State<f64>> {
         let d = self.dense.as_ref()?;
         let th = if d.h > 0.0 {
-            ((t - d.t0) / d.h).clamp(0.0, d.th_end)
+            ((t - d.t0) / d.h).max(0.0).min(d.th_end)
         } else {
             0.0
         };
@@ -579,28 +628,30 @@ impl Adaptive {
             let mode = self.modes[i];
             let (min, max) = (self.c.axes[i].min, self.c.axes[i].max);
             if mode == Mode::Stopped {
-                // Breakaway: the margin at the stages (in time order), then bisection on the
-                // margin at the dense state.
+                // Breakaway: the margin at the stages (in time order), then the crossing of
+                // the margin evaluated at the dense state.
                 let ax = self.c.axes[i];
                 let q = self.y.q[i];
-                let mut prev = 0.0;
+                let mut prev = 0usize;
                 let mut found = None;
                 for s in [1usize, 2, 3, 4, 6] {
-                    if let Some((dir, _)) = candidate(&ax, q, tr.evals[s].hold[i]) {
-                        found = Some((prev, C[s], dir));
+                    if let Some((dir, m)) = candidate(&ax, q, tr.evals[s].hold[i]) {
+                        found = Some((prev, s, dir, m));
                         break;
                     }
-                    prev = C[s];
+                    prev = s;
                 }
-                if let Some((lo, hi, dir)) = found {
+                if let Some((s_lo, s_hi, dir, m_hi)) = found {
                     let (t0, c, modes) = (self.t, &self.c, &self.modes);
+                    let m_lo = margin(&ax, q, tr.evals[s_lo].hold[i], dir);
                     let mut n = 0;
-                    let th = bisect(h, self.tol.event, lo, hi, |th| {
+                    let th = locate(h, self.tol.event, (C[s_lo], m_lo), (C[s_hi], m_hi), |th| {
                         let st = unpack(&d.state(th));
                         let us = saturate(u(t0 + th * h))?;
                         n += 1;
                         let e = eval(c, Law::Hybrid, &st, modes, &us)?;
-                        Ok(margin(&ax, q, e.hold[i], dir) > 0.0)
+                        let m = margin(&ax, q, e.hold[i], dir);
+                        Ok((m > 0.0, m))
                     })?;
                     self.stats.evals += n;
                     consider(th, EventKind::Breakaway, i);
@@ -608,19 +659,35 @@ impl Adaptive {
                 continue;
             }
             for kind in [EventKind::Velocity, EventKind::Limit] {
-                let hit = |th: f64| match kind {
-                    EventKind::Velocity => velocity_violated(mode, d.component(5 + i, th)),
-                    _ => limit_violated(mode, d.component(i, th), min, max),
+                // The event function, >= 0 once the event has happened.
+                let g = |th: f64| match kind {
+                    EventKind::Velocity => {
+                        let v = d.component(5 + i, th);
+                        (
+                            velocity_violated(mode, v),
+                            if mode == Mode::Positive { -v } else { v },
+                        )
+                    }
+                    _ => {
+                        let x = d.component(i, th);
+                        let over = if mode == Mode::Positive {
+                            x - max
+                        } else {
+                            min - x
+                        };
+                        (limit_violated(mode, x, min, max), over)
+                    }
                 };
-                let mut prev = 0.0;
+                let mut prev = (0.0, g(0.0).1);
                 for n in 1..=EVENT_SAMPLES {
                     let th = n as f64 / EVENT_SAMPLES as f64;
-                    if hit(th) {
-                        let th = bisect(h, self.tol.event, prev, th, |t| Ok(hit(t)))?;
+                    let (hit, v) = g(th);
+                    if hit {
+                        let th = locate(h, self.tol.event, prev, (th, v), |t| Ok(g(t)))?;
                         consider(th, kind, i);
                         break;
                     }
-                    prev = th;
+                    prev = (th, v);
                 }
             }
         }
@@ -759,4 +826,60 @@ pub fn energy(c: &Coeffs<f64>, y: &State<f64>) -> f64 {
     }
     let [_, _, l, a, b] = y.q;
     0.5 * kin - c.mpg * l * libm::sin(a) * libm::cos(b)
+}
+
+#[cfg(test)]
+#[allow(clippy::expect_used)]
+mod tests {
+    use super::{locate, AdaptiveError};
+
+    /// Locates the root of `g` in `(lo, hi]` on a 1 s step to `tol`; returns the point and the
+    /// number of evaluations.
+    fn run(g: impl Fn(f64) -> f64, lo: f64, hi: f64, tol: f64) -> (f64, usize) {
+        let mut n = 0;
+        let th = locate(1.0, tol, (lo, g(lo)), (hi, g(hi)), |x| {
+            n += 1;
+            let v = g(x);
+            Ok::<_, AdaptiveError>((v >= 0.0, v))
+        })
+        .expect("no error");
+        (th, n)
+    }
+
+    #[test]
+    fn a_smooth_crossing_is_bracketed_to_tolerance_in_few_evaluations() {
+        // A velocity through zero with curvature, as in a decelerating slip: root at 0.3.
+        let g = |x: f64| (x - 0.3) * (1.0 + 4.0 * x * x);
+        let (th, n) = run(g, 0.0, 1.0, 1e-10);
+        assert!(g(th) >= 0.0, "the returned point is on the violated side");
+        assert!((th - 0.3).abs() <= 1e-10, "th = {th}");
+        // Bisection would take ceil(log2(1e10)) = 34 (measured: 8).
+        assert!(n <= 10, "{n} evaluations");
+    }
+
+    #[test]
+    fn a_jump_without_a_slope_still_converges_by_bisection() {
+        // Only the sign carries information: the safeguard must still shrink the bracket.
+        let g = |x: f64| if x >= 0.6180339887 { 1.0 } else { -1e-9 };
+        let (th, n) = run(g, 0.0, 1.0, 1e-9);
+        assert!(
+            (0.6180339887..=0.6180339887 + 1e-9).contains(&th),
+            "th = {th}"
+        );
+        // Bisection: ceil(log2(1e9)) = 30; ITP: at most one more.
+        assert!(n <= 31, "{n} evaluations");
+    }
+
+    #[test]
+    fn the_flag_decides_the_side_not_the_value() {
+        // A value that says "not yet" (0) where the flag says "happened" at exactly the root.
+        let mut n = 0;
+        let th = locate(1.0, 1e-12, (0.0, -1.0), (1.0, 1.0), |x| {
+            n += 1;
+            Ok::<_, AdaptiveError>((x >= 0.25, (x - 0.25).min(0.0)))
+        })
+        .expect("no error");
+        assert!(th >= 0.25 && th - 0.25 <= 1e-12, "th = {th}");
+        assert!(n < super::MAX_LOCATE);
+    }
 }

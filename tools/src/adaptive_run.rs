@@ -65,22 +65,37 @@ pub fn hybrid_adaptive(case: &Case, tol: &Tolerances) -> Result<(Trajectory, Ada
             error,
         })?;
         let poly = a.dense_poly().ok_or(Error::NoDenseOutput { t: a.time() })?;
-        while next <= n {
-            let tk = next as f64 * case.sample;
-            if tk > s.t1 && s.t1 < t_end {
-                break;
-            }
-            // Inside the step: the dense output in the step's modes; at an event's end: the
-            // state after the reset, in the new modes.
-            if s.event.is_some() && tk >= s.t1 {
-                tr.states.push(a.state());
-                tr.modes.push(a.modes());
-            } else {
-                tr.states.push(poly.at(tk));
-                tr.modes.push(a.step_modes());
-            }
-            next += 1;
+        // The grid points this step covers: `next ..= end`, every `k` with `k dt <= t1`
+        // (all the rest once the run has ended).
+        let tk = |k: usize| k as f64 * case.sample;
+        let mut end = if s.t1 >= t_end {
+            n
+        } else {
+            ((s.t1 / case.sample) as usize).min(n)
+        };
+        while end < n && tk(end + 1) <= s.t1 {
+            end += 1;
         }
+        while end >= next && tk(end) > s.t1 && s.t1 < t_end {
+            end -= 1;
+        }
+        if end < next {
+            continue;
+        }
+        // Inside the step: the dense output in the step's modes; at an event's end: the state
+        // after the reset, in the new modes.
+        let after_reset = s.event.is_some() && tk(end) >= s.t1;
+        let dense_end = if after_reset { end - 1 } else { end };
+        if dense_end + 1 > next {
+            tr.states.extend((next..=dense_end).map(|k| poly.at(tk(k))));
+            tr.modes
+                .extend(core::iter::repeat_n(a.step_modes(), dense_end + 1 - next));
+        }
+        if after_reset {
+            tr.states.push(a.state());
+            tr.modes.push(a.modes());
+        }
+        next = end + 1;
     }
     let st = a.stats();
     tr.steps = st.accepted;
