@@ -23,8 +23,11 @@ grid against this script's own reference, the hybrid model under RK45 at rtol 1e
 atol 1e-14 (checked against the Rust 10 us reference: see BENCHMARKS.md). Times: the fastest
 of repeated runs (3 runs while a run takes under 1 s, else 1), one thread, the whole solve
 including the samples. A series (one model, one method) stops after a run longer than
-`--cap` seconds: the tighter tolerances cost more without lowering the error below the
-smoothing error.
+`--cap` seconds (default 3): the tighter tolerances cost more without lowering the error below
+the smoothing error; a run longer than `--run-limit` seconds (default 30) is aborted and
+listed as such, not as a point; and once a `tanh` series' loosest run took longer than the cap
+(or was aborted), the larger gammas are not run under that method (an explicit solver's cost
+grows with gamma). Every skipped or aborted run is printed and kept in the JSON.
 
 Why the event loop is written as it is (it used to hang in case 2):
 - a breakaway is NOT applied by setting the mode: the located point is only a root of the
@@ -41,6 +44,7 @@ Why the event loop is written as it is (it used to hang in case 2):
 Usage (needs numpy and scipy; not run in CI):
     python3 -m venv venv && venv/bin/pip install numpy scipy
     venv/bin/python tools/scripts/scipy_peer.py [--quick] [--json out.json] [--cap S]
+        [--run-limit S] [--case 1|2]
 """
 
 import argparse
@@ -82,6 +86,10 @@ class HybridStuck(RuntimeError):
     """The hybrid event loop made no progress (restart cap or stalled restarts)."""
 
 
+class RunTooLong(RuntimeError):
+    """A run passed its wall-time limit (`Case.deadline`) and was aborted: not a point."""
+
+
 class Case:
     """One of the paper's cases (tools/src/cases.rs)."""
 
@@ -113,6 +121,9 @@ class Case:
         self.mpg = self.mp * G
         self.grid = np.arange(1, int(round(self.duration / 1e-3)) + 1) * 1e-3
         self.last = {}
+        # Wall-clock deadline (time.perf_counter) of the current run, checked at every
+        # evaluation; None: no limit.
+        self.deadline = None
 
     def force(self, t):
         """Rope drive force [N] at time t (case 2: -m_p g + 12 sin(2 pi 0.5 t); case 1: 0)."""
@@ -125,6 +136,8 @@ class Case:
         friction forces `fric` on the drive axes and the axes in `stopped` held (qdd_i = 0).
         NUMERICS.md "One evaluation"; Gaussian elimination without pivoting (M is positive
         definite)."""
+        if self.deadline is not None and time.perf_counter() > self.deadline:
+            raise RunTooLong(f"case {self.cid}: aborted at t = {t:.4g} s of {self.duration:g} s")
         _, _, L, a, b, _, _, Ld, ad, bd = y
         sa, ca, sb, cb = math.sin(a), math.cos(a), math.sin(b), math.cos(b)
         mp = self.mp
@@ -264,6 +277,7 @@ class Case:
         nfev = 0
         restarts = 0
         stalls = 0
+        nudges = 0
         stops, releases = [], []
         for i in self.free:
             if modes[i] != STOPPED:
@@ -331,6 +345,7 @@ class Case:
                 # resolution below sees the guard hold.
                 dt = 16.0 * np.finfo(float).eps * max(1.0, abs(te))
                 while self.margin(te, y, m, i) <= 0.0 and dt <= NUDGE_MAX:
+                    nudges += 1
                     qdd, _ = self.hybrid_eval(te, y, m)
                     yd = y[5:] + qdd
                     y = [yj + dt * dj for yj, dj in zip(y, yd)]
@@ -353,7 +368,7 @@ class Case:
                                   f"advanced less than {STALL_DT:g} s (t = {te:.12g} s, "
                                   f"modes {modes}, last event {kind} of axis {i})")
             t = te
-        self.last = dict(restarts=restarts, stops=stops, releases=releases, y_end=y,
+        self.last = dict(restarts=restarts, nudges=nudges, stops=stops, releases=releases, y_end=y,
                          modes_end=modes)
         return out, nfev
 
@@ -439,8 +454,12 @@ def levels_table(points):
     return rows
 
 
-def run_case(cid, quick, cap, log):
-    """Reference and every series of one case; returns (reference info, points, level rows)."""
+def run_case(cid, quick, cap, run_limit, log):
+    """Reference and every series of one case; returns (reference info, points, level rows).
+
+    A series stops after a run longer than `cap` seconds; a run longer than `run_limit` is
+    aborted (recorded as such, not a point); for one method, once a series' loosest run took
+    longer than `cap`, the larger gammas are not run (their cost grows with gamma)."""
     case = Case(cid)
     t0 = time.perf_counter()
     ref, ref_nfev = case.hybrid(RTOL_REF, ATOL_REF)
@@ -452,23 +471,40 @@ def run_case(cid, quick, cap, log):
     log(f"case {cid}: reference (hybrid, RK45+events rtol {RTOL_REF:g}, atol {ATOL_REF:g}) in "
         f"{ref_info['time_s']:.1f} s, {ref_nfev} evaluations, {ref_info['restarts']} restarts")
     points = []
+    skip_from = {}  # method -> the series after which larger gammas are not run
     print(f"\n### Case {cid}\n")
     print("| series | rtol | time | RMSE [m/s] | nfev |")
     print("|---|---|---|---|---|")
     for model, g, method, rtols in series_plan(quick):
         name = "hybrid" if g is None else f"tanh({g:g} v)"
-        for r in rtols:
+        if model == "tanh" and method in skip_from:
+            log(f"case {cid}: {name} {method}: not run ({skip_from[method]})")
+            points.append(dict(case=cid, model=model, gamma=g, method=method,
+                               skipped=skip_from[method]))
+            print(f"| {name} {method} | - | not run | - | - |")
+            continue
+        for n_run, r in enumerate(rtols):
             a = r * 1e-2
-            if model == "hybrid":
-                fn = lambda r=r, a=a: case.hybrid(r, a)
-            else:
-                fn = lambda r=r, a=a: tanh_run(case, g, method, r, a)
+
+            def fn(r=r, a=a):
+                case.deadline = time.perf_counter() + run_limit
+                try:
+                    if model == "hybrid":
+                        return case.hybrid(r, a)
+                    return tanh_run(case, g, method, r, a)
+                finally:
+                    case.deadline = None
             try:
                 t, (v, nfev) = best_time(fn, repeat_below=0.2 if quick else 1.0)
-            except Exception as e:  # a failed run is reported, and ends its series
-                log(f"case {cid}: {name} {method} rtol {r:g}: failed: {e}")
+            except Exception as e:  # a failed or aborted run is reported, and ends its series
+                why = f"{type(e).__name__}: {e}"
+                log(f"case {cid}: {name} {method} rtol {r:g}: {why}")
                 points.append(dict(case=cid, model=model, gamma=g, method=method, rtol=r,
-                                   failed=str(e)))
+                                   failed=why))
+                shown = f"> {run_limit:g} s (aborted)" if isinstance(e, RunTooLong) else "failed"
+                print(f"| {name} {method} | {r:g} | {shown} | - | - |", flush=True)
+                if n_run == 0 and model == "tanh":
+                    skip_from[method] = f"{name} at rtol {r:g} was aborted"
                 break
             e = rmse(v, ref)
             p = dict(case=cid, model=model, gamma=g, method=method, rtol=r, atol=a, time_s=t,
@@ -478,8 +514,10 @@ def run_case(cid, quick, cap, log):
             if t > cap:
                 log(f"case {cid}: {name} {method}: series stops after rtol {r:g} ({t:.1f} s > "
                     f"cap {cap:g} s)")
+                if n_run == 0 and model == "tanh":
+                    skip_from[method] = f"{name} took {t:.1f} s at rtol {r:g}"
                 break
-    ok = [p for p in points if "failed" not in p]
+    ok = [p for p in points if "time_s" in p]
     rows = levels_table(ok)
     print(f"\nCase {cid}: fastest setting reaching each error level\n")
     print("| level [m/s] | hybrid RK45+events | tanh RK45 | tanh LSODA | speed-up (best tanh / hybrid) |")
@@ -491,9 +529,11 @@ def run_case(cid, quick, cap, log):
     return ref_info, points, rows
 
 
-def write_json_atomic(path, obj, force):
-    """Writes `obj` as JSON to `path` via a temporary file in the same directory and a rename.
-    Refuses to replace a file that is not an earlier output of this script unless `force`."""
+def check_json_target(path, force):
+    """Raises SystemExit unless `path` may be written: absent, an earlier output of this
+    script, or `force`; never a directory."""
+    if os.path.isdir(path):
+        raise SystemExit(f"--json {path}: is a directory")
     if os.path.exists(path) and not force:
         try:
             with open(path) as f:
@@ -504,6 +544,12 @@ def write_json_atomic(path, obj, force):
         if not ours:
             raise SystemExit(f"--json {path}: exists and is not an output of this script "
                              "(use --force to replace it)")
+
+
+def write_json_atomic(path, obj, force):
+    """Writes `obj` as JSON to `path` via a temporary file in the same directory and a rename
+    (see `check_json_target`)."""
+    check_json_target(path, force)
     d = os.path.dirname(os.path.abspath(path))
     fd, tmp = tempfile.mkstemp(prefix=".scipy_peer.", suffix=".tmp", dir=d)
     try:
@@ -533,21 +579,26 @@ def main(argv=None):
     ap.add_argument("--force", action="store_true", help="let --json replace any existing file")
     ap.add_argument("--cap", type=positive_seconds, default=3.0,
                     help="a series stops after a run longer than this [s], in (0, 600] (default 3)")
+    ap.add_argument("--run-limit", type=positive_seconds, default=30.0,
+                    help="a run longer than this [s] is aborted (not a point), in (0, 600] "
+                         "(default 30)")
     ap.add_argument("--case", type=int, choices=(1, 2), action="append",
                     help="run only this case (repeatable; default both)")
     args = ap.parse_args(argv)
-    if args.json and os.path.isdir(args.json):
-        ap.error(f"--json {args.json}: is a directory")
+    if args.json:
+        check_json_target(args.json, args.force)  # before the run, not after it
     log = lambda msg: print(msg, file=sys.stderr, flush=True)
     start = time.perf_counter()
     print(f"scipy {scipy.__version__}, numpy {np.__version__}, Python {platform.python_version()}"
-          f"; {'quick' if args.quick else 'full'} run, series cap {args.cap:g} s")
+          f"; {'quick' if args.quick else 'full'} run, series cap {args.cap:g} s, "
+          f"run limit {args.run_limit:g} s")
     result = dict(tool="scipy_peer", scipy=scipy.__version__, numpy=np.__version__,
                   python=platform.python_version(), quick=args.quick, cap_s=args.cap,
+                  run_limit_s=args.run_limit,
                   date=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
                   cases=[])
     for cid in sorted(set(args.case or [1, 2])):
-        ref_info, points, rows = run_case(cid, args.quick, args.cap, log)
+        ref_info, points, rows = run_case(cid, args.quick, args.cap, args.run_limit, log)
         result["cases"].append(dict(case=cid, reference=ref_info, points=points, levels=rows))
     result["wall_s"] = time.perf_counter() - start
     log(f"total {result['wall_s']:.0f} s")
