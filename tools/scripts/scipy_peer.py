@@ -21,8 +21,9 @@ held axes; continuous-time input, as the Rust adaptive integrator). Not modelled
 Error: RMSE of the compared velocity (case 1: trolley `yd`, case 2: rope `Ld`) on the 1 ms
 grid against this script's own reference, the hybrid model under RK45 at rtol 1e-12,
 atol 1e-14 (checked against the Rust 10 us reference: see BENCHMARKS.md). Times: the fastest
-of repeated runs (3 runs while a run takes under 1 s, else 1), one thread, the whole solve
-including the samples. A series (one model, one method) stops after a run longer than
+of repeated runs (a run over 1 s timed once, else repeated for 0.5 s, at least 3 and at most
+20 times; `--quick`: 3 runs under 0.2 s, else 1), one thread, the whole solve including the
+samples. A series (one model, one method) stops after a run longer than
 `--cap` seconds (default 3): the tighter tolerances cost more without lowering the error below
 the smoothing error; a run longer than `--run-limit` seconds (default 30) is aborted and
 listed as such, not as a point; and once a `tanh` series' loosest run took longer than the cap
@@ -383,17 +384,21 @@ def tanh_run(case, gamma, method, rtol, atol):
     return sol.y[5 + case.observed], sol.nfev
 
 
-def best_time(fn, repeat_below=1.0, repeats=3):
-    """Fastest wall time [s] of `repeats` runs of fn while a run takes under `repeat_below`
-    seconds (else of one run), and the first run's result."""
-    t0 = time.perf_counter()
+def best_time(fn, budget=0.5, single_above=1.0, max_runs=20):
+    """Fastest wall time [s] of repeated runs of fn and the first run's result: a run longer
+    than `single_above` seconds is timed once; otherwise runs are repeated until `budget`
+    seconds have passed, at least 3 and at most `max_runs` (as `crane study`'s time_best)."""
+    start = time.perf_counter()
     r = fn()
-    best = time.perf_counter() - t0
-    if best < repeat_below:
-        for _ in range(repeats - 1):
-            t1 = time.perf_counter()
-            fn()
-            best = min(best, time.perf_counter() - t1)
+    best = time.perf_counter() - start
+    if best > single_above:
+        return best, r
+    runs = 1
+    while runs < 3 or (runs < max_runs and time.perf_counter() - start < budget):
+        t1 = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t1)
+        runs += 1
     return best, r
 
 
@@ -495,7 +500,8 @@ def run_case(cid, quick, cap, run_limit, log):
                 finally:
                     case.deadline = None
             try:
-                t, (v, nfev) = best_time(fn, repeat_below=0.2 if quick else 1.0)
+                t, (v, nfev) = (best_time(fn, budget=0.0, single_above=0.2) if quick
+                                else best_time(fn))
             except Exception as e:  # a failed or aborted run is reported, and ends its series
                 why = f"{type(e).__name__}: {e}"
                 log(f"case {cid}: {name} {method} rtol {r:g}: {why}")
