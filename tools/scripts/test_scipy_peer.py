@@ -21,8 +21,9 @@ import sys
 import pytest
 
 if os.environ.get("CI"):
-    import numpy as np
-    import scipy  # noqa: F401  (CI must have it: fail, do not skip)
+    import numpy as np  # CI must have numpy and scipy: fail, do not skip
+    import scipy
+    assert scipy.__version__
 else:
     np = pytest.importorskip("numpy", reason="numpy not installed")
     pytest.importorskip("scipy", reason="scipy not installed")
