@@ -32,17 +32,21 @@ grows with gamma). Every skipped or aborted run is printed and kept in the JSON.
 
 Why the event loop is written as it is (it used to hang in case 2):
 - a breakaway is NOT applied by setting the mode: the located point is only a root of the
-  margin to within rounding, and the old loop released the axis there and then let its
-  "other velocities that crossed zero" sweep stop it again at once (its velocity is exactly
-  0, so `v * mode <= 0`), restarting at the same time forever. Now the restart point is moved
-  past the root (a tiny explicit step, at most `NUDGE_MAX` seconds, until the margin is
-  positive) and the mode resolution decides the release, as in the Rust model;
+  margin to within rounding. The old loop set the mode there, its "other velocities that
+  crossed zero" sweep undid that at once (the velocity is exactly 0, so `v * mode <= 0`), and
+  the mode resolution released the axis again only if the margin at the root happened to be
+  positive. In case 2 it was at the first breakaway (0.3046 s), not at the second
+  (1.3046 s): the axis stayed stopped, and the restarted solve_ivp found the same root again,
+  forever. Now the restart point is moved past the root (a tiny explicit step, at most
+  `NUDGE_MAX` seconds, until the margin is positive) and the mode resolution alone decides
+  the release, as in the Rust model (its located breakaway is on the positive side);
 - a released axis accelerates in its direction (the resolution checks it), so the velocity
   event `qd_i` (direction against the motion) cannot fire at the restart time;
 - every run has a hard cap: `MAX_RESTARTS` restarts, and `MAX_STALLS` consecutive restarts that
   advance time by less than `STALL_DT` raise `HybridStuck` instead of looping.
 
-Usage (needs numpy and scipy; not run in CI):
+Usage (needs numpy and scipy; the benchmark itself is not run in CI, its test
+tools/scripts/test_scipy_peer.py is cheap):
     python3 -m venv venv && venv/bin/pip install numpy scipy
     venv/bin/python tools/scripts/scipy_peer.py [--quick] [--json out.json] [--cap S]
         [--run-limit S] [--case 1|2]
