@@ -101,4 +101,11 @@ PATH="$venv/bin:$PATH" "$venv/bin/python" -m pip install -q --disable-pip-versio
 RAY_USAGE_STATS_ENABLED=0 "$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests
 # ---- end python ----------------------------------------------------------------------------
 
+# ---- scipy peer (issue 15): tools/scripts/scipy_peer.py's physics and event loop, in the
+# shared venv (numpy from the block above). The full timing run is not for CI (~100 s loaded).
+step "scipy peer: pytest tools/scripts/test_scipy_peer.py"
+"$venv/bin/python" -m pip install -q --disable-pip-version-check scipy==1.17.1
+"$venv/bin/python" -m pytest -q -p no:cacheprovider tools/scripts/test_scipy_peer.py
+# ---- end scipy peer ------------------------------------------------------------------------
+
 step "done"
