@@ -26,7 +26,8 @@ mod board;
 #[cfg(not(feature = "board"))]
 mod sim;
 
-use board_stm32::regs;
+use board_stm32::regs::{self, PERIOD_US};
+use board_stm32::watchdog::{self, ResetCause};
 use core::cell::RefCell;
 use core::fmt::Write;
 use core::panic::PanicInfo;
@@ -42,9 +43,6 @@ use stm32f4xx_hal::prelude::*;
 static TICKS: Mutex<RefCell<TickLatch>> = Mutex::new(RefCell::new(TickLatch::new()));
 /// Encoder counters latched at the last tick (board).
 static LATCHED: Mutex<RefCell<[u16; 5]>> = Mutex::new(RefCell::new([0; 5]));
-
-/// Control period [us].
-pub const PERIOD_US: u32 = 2_000;
 
 /// Waits (WFI) for the next tick; returns the periods missed since the previous one taken.
 pub fn wait_tick() -> u64 {
@@ -140,10 +138,13 @@ fn main() -> ! {
     let (Some(dp), Some(mut cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
         fault_stop(b"PANIC peripherals taken twice\r\n");
     };
-    // Reset cause (RCC_CSR): after a watchdog reset the supervisor is not armed again.
-    let csr = dp.RCC.csr().read().bits();
-    let watchdog_reset = csr & (1 << 29) != 0;
-    dp.RCC.csr().modify(|_, w| w.rmvf().set_bit());
+    // Reset cause (RCC_CSR): after a watchdog reset the supervisor is not armed again, and the
+    // flags stay set so that only a power-cycle clears them.
+    let csr = regs::rcc_csr();
+    let reset = ResetCause::from_rcc_csr(csr);
+    if reset.clear_flags {
+        regs::clear_reset_flags();
+    }
     #[cfg(feature = "rcc")]
     let mut rcc = {
         // Flash latency and the ART accelerator first, before the clock goes up.
@@ -176,10 +177,22 @@ fn main() -> ! {
         env!("CARGO_PKG_VERSION"),
         rcc.clocks.sysclk().raw()
     );
-    let _ = writeln!(log, "RESET csr={csr:08x} watchdog={watchdog_reset}");
+    let _ = writeln!(log, "RESET csr={csr:08x} watchdog={}", reset.watchdog);
 
-    let mut wdg = stm32f4xx_hal::watchdog::IndependentWatchdog::new(dp.IWDG);
-    wdg.start(10.millis());
+    // The independent watchdog: fed by the period loop only (`guard::at_tick`).
+    let _ = dp.IWDG;
+    regs::watchdog_start(watchdog::IWDG);
+    let _ = writeln!(
+        log,
+        "IWDG pr={} rlr={} timeout={} us (LSI {}-{} kHz: {}-{} us)",
+        watchdog::IWDG.pr,
+        watchdog::IWDG.rlr,
+        watchdog::IWDG.timeout_us(watchdog::LSI_HZ_TYP),
+        watchdog::LSI_HZ_MIN / 1000,
+        watchdog::LSI_HZ_MAX / 1000,
+        watchdog::IWDG.timeout_us(watchdog::LSI_HZ_MAX),
+        watchdog::IWDG.timeout_us(watchdog::LSI_HZ_MIN),
+    );
 
     #[cfg(feature = "board")]
     let code = board::run(board::Parts {
@@ -204,14 +217,13 @@ fn main() -> ! {
         tim8: dp.TIM8,
         rcc: &mut rcc,
         nvic: &mut cp.NVIC,
-        wdg: &mut wdg,
-        watchdog_reset,
+        reset,
         log: &mut log,
     });
     #[cfg(not(feature = "board"))]
     let code = {
-        let _ = (watchdog_reset, &mut cp);
-        sim::run(&mut rcc, &mut wdg, &mut log)
+        let _ = (reset, &mut cp);
+        sim::run(&mut rcc, &mut log)
     };
     let _ = writeln!(log, "DONE {code}");
     #[cfg(not(feature = "board"))]

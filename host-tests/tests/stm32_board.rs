@@ -150,7 +150,12 @@ fn field<'a>(text: &'a str, prefix: &str, key: &str) -> &'a str {
 }
 
 fn ccr(text: &str, prefix: &str) -> [u32; 3] {
-    let v: Vec<u32> = field(text, prefix, "ccr")
+    triple(text, prefix, "ccr")
+}
+
+/// Three comma-separated numbers in `key=` of the first line starting with `prefix`.
+fn triple(text: &str, prefix: &str, key: &str) -> [u32; 3] {
+    let v: Vec<u32> = field(text, prefix, key)
         .split(',')
         .map(|x| x.parse().expect("ccr value"))
         .collect();
@@ -174,6 +179,8 @@ fn stm32_trajectory_matches_host_and_a_forced_panic_zeroes_the_pwm() {
     assert_eq!(field(&fw, "TICKS ", "ticks"), "4000");
     assert_eq!(field(&fw, "TICKS ", "overruns"), "0");
     assert!(fw.contains("SUPERVISOR Run"), "{fw}");
+    // the loop fed the watchdog once per period, from the period loop
+    assert_eq!(field(&fw, "SUPERVISOR ", "feeds"), "4000");
     // 3. the forced panic: PWM running before, compare registers and outputs 0 after
     let before = ccr(&fw, "BEFORE ");
     assert!(
@@ -230,4 +237,82 @@ fn stm32_estop_forces_the_safe_state() {
     assert_eq!(ccr(&fw, "BEFORE "), [0, 0, 0]);
     assert_eq!(field(&fw, "BEFORE ", "ccer"), "0");
     assert!(status.success(), "the e-stop run ends normally:\n{fw}");
+}
+
+/// The `INPUT` line of pin `pin` (e.g. `PB8`).
+fn input_line<'a>(fw: &'a str, pin: &str) -> &'a str {
+    let tag = format!("INPUT {pin} ");
+    fw.lines()
+        .find(|l| l.starts_with(&tag))
+        .unwrap_or_else(|| panic!("no `{tag}` line in:\n{fw}"))
+}
+
+#[test]
+#[ignore = "needs qemu-system-arm and the board ELF; run by scripts/test.sh"]
+fn stm32_every_safety_input_forces_the_safe_state() {
+    // e-stop PB0, driver fault PB1, limits X-/X+ PB8/PB9, Y-/Y+ PB10/PB11, L-/L+ PB12/PB13:
+    // each alone, through the board's pin decoding, supervisor and `force_safe`
+    let (status, fw) = run_board("inputs");
+    assert!(fw.contains("MODE Inputs"), "{fw}");
+    let expect = [
+        ("PB0", "Safe(EStop)".to_string()),
+        ("PB1", "Safe(DriverFault)".to_string()),
+    ]
+    .into_iter()
+    .chain((0..6).map(|k| {
+        (
+            ["PB8", "PB9", "PB10", "PB11", "PB12", "PB13"][k],
+            format!(
+                "Safe(Limit {{ axis: {}, positive: {} }})",
+                k / 2,
+                k % 2 == 1
+            ),
+        )
+    }));
+    for (pin, state) in expect {
+        let line = input_line(&fw, pin);
+        let before = triple(line, "INPUT ", "before");
+        assert!(
+            before.iter().all(|&c| c > 0),
+            "{pin}: PWM not driven before: {line}"
+        );
+        assert!(line.contains(&format!("state={state} ")), "{pin}: {line}");
+        // the loop kept commanding for three periods: nothing reached the PWM
+        assert_eq!(ccr(line, "INPUT "), [0, 0, 0], "{pin}: {line}");
+        assert_eq!(field(line, "INPUT ", "ccer"), "0", "{pin}: {line}");
+        // a safe state with the loop alive keeps the watchdog fed (no reset loop)
+        assert_eq!(field(line, "INPUT ", "fed"), "3", "{pin}: {line}");
+    }
+    // every contact open at once (a cut cable): the e-stop is named
+    let all = input_line(&fw, "all");
+    assert!(all.contains("state=Safe(EStop) "), "{all}");
+    assert_eq!(ccr(all, "INPUT "), [0, 0, 0]);
+    assert!(status.success(), "{fw}");
+}
+
+#[test]
+#[ignore = "needs qemu-system-arm and the board ELF; run by scripts/test.sh"]
+fn stm32_a_stalled_loop_trips_overrun_and_stops_feeding_the_watchdog() {
+    let (status, fw) = run_board("stall");
+    assert!(fw.contains("MODE Stall"), "{fw}");
+    let line = |missed: &str| {
+        fw.lines()
+            .find(|l| l.starts_with(&format!("STALL missed={missed} ")))
+            .unwrap_or_else(|| panic!("no STALL missed={missed} line in:\n{fw}"))
+    };
+    // two periods late: tolerated; the timer interrupt counted both overruns
+    let ok = line("2");
+    assert!(ok.contains("state=Run "), "{ok}");
+    assert_eq!(field(ok, "STALL ", "feeds"), "11", "{ok}");
+    assert_eq!(field(ok, "STALL ", "overruns"), "2", "{ok}");
+    assert!(ccr(ok, "STALL ").iter().all(|&c| c > 0), "{ok}");
+    // three: overrun, safe state, and the watchdog is never fed again (on the board it
+    // resets the chip 6.8-18.8 ms later and the reset latches `WatchdogReset`)
+    let bad = line("3");
+    assert!(bad.contains("state=Safe(Overrun) "), "{bad}");
+    assert_eq!(field(bad, "STALL ", "feeds"), "0", "{bad}");
+    assert_eq!(field(bad, "STALL ", "overruns"), "5", "{bad}");
+    assert_eq!(ccr(bad, "STALL "), [0, 0, 0]);
+    assert_eq!(field(bad, "STALL ", "ccer"), "0");
+    assert!(status.success(), "{fw}");
 }
