@@ -20,6 +20,7 @@ use crate::{latched_counts, start_ticks, wait_tick, Log};
 use board_stm32::guard;
 use board_stm32::regs::{self, PwmTimer};
 use board_stm32::safety_pins::inputs_from_idr;
+use board_stm32::stack;
 use board_stm32::watchdog::ResetCause;
 use core::cell::RefCell;
 use core::fmt::Write;
@@ -213,8 +214,9 @@ pub fn run<W: Write>(p: Parts<'_, W>) -> i32 {
             let (ticks, overruns) = crate::tick_counts();
             let _ = writeln!(
                 log,
-                "P {k} state={:?} ticks={ticks} overruns={overruns}",
-                io.sup.state()
+                "P {k} state={:?} ticks={ticks} overruns={overruns} stack={}",
+                io.sup.state(),
+                stack::high_water(&stack::Layout::linked())
             );
         }
         k = k.wrapping_add(1);

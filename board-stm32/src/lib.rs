@@ -9,4 +9,5 @@ pub mod guard;
 #[cfg_attr(not(feature = "board"), allow(dead_code))]
 pub mod regs;
 pub mod safety_pins;
+pub mod stack;
 pub mod watchdog;

@@ -27,12 +27,14 @@ mod board;
 mod sim;
 
 use board_stm32::regs::{self, PERIOD_US};
+use board_stm32::stack;
 use board_stm32::watchdog::{self, ResetCause};
 use core::cell::RefCell;
 use core::fmt::Write;
 use core::panic::PanicInfo;
+use core::sync::atomic::{AtomicU32, Ordering};
 use cortex_m::interrupt::Mutex;
-use cortex_m_rt::{entry, exception, ExceptionFrame};
+use cortex_m_rt::entry;
 use crane_twin::logic::safety::TickLatch;
 #[cfg(feature = "probe")]
 use defmt_rtt as _;
@@ -135,6 +137,11 @@ impl<W: Write> Write for Log<W> {
 #[entry]
 fn main() -> ! {
     // Outputs are off at reset (timers disabled, GPIO inputs): nothing to undo first.
+    // The free stack painted for its high-water mark (interrupts are still off).
+    let layout = stack::Layout::linked();
+    stack::paint(&layout);
+    // (an opaque store: the compiler cannot fold the static into flash)
+    CANARY.store(core::hint::black_box(CANARY_VALUE), Ordering::Relaxed);
     let (Some(dp), Some(mut cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
         fault_stop(b"PANIC peripherals taken twice\r\n");
     };
@@ -178,6 +185,16 @@ fn main() -> ! {
         rcc.clocks.sysclk().raw()
     );
     let _ = writeln!(log, "RESET csr={csr:08x} watchdog={}", reset.watchdog);
+    let _ = writeln!(
+        log,
+        "LAYOUT stack={:08x}..{:08x} statics={:08x}..{:08x} reserved={} below_statics={}",
+        layout.stack_limit,
+        layout.stack_top,
+        layout.data_start,
+        layout.bss_end,
+        layout.reserved(),
+        layout.stack_below_statics()
+    );
 
     // The independent watchdog: fed by the period loop only (`guard::at_tick`).
     let _ = dp.IWDG;
@@ -314,9 +331,44 @@ fn panic(info: &PanicInfo) -> ! {
     fault_stop(b"")
 }
 
-#[exception]
-unsafe fn HardFault(_frame: &ExceptionFrame) -> ! {
+/// A static in RAM, set at start, whose value the HardFault handler reports: a stack overflow
+/// that ran into the statics would have overwritten it (with flip-link it faults first).
+pub static CANARY: AtomicU32 = AtomicU32::new(0);
+/// The canary's value.
+pub const CANARY_VALUE: u32 = 0x5AFE_C0DE;
+
+// The HardFault entry, in assembly, instead of cortex-m-rt's trampoline: before any Rust code
+// (which pushes registers) the stack pointer goes back to the top of the stack. After a stack
+// overflow (with flip-link: below the start of RAM) the exception is entered with the stack
+// pointer below RAM, and the handler's first push would fault again inside HardFault: a
+// lockup, with the PWM still running until the watchdog bites. The exception frame is given up
+// (this handler never returns).
+core::arch::global_asm!(
+    ".section .HardFault.user, \"ax\"",
+    ".global HardFault",
+    ".type HardFault,%function",
+    ".thumb_func",
+    "HardFault:",
+    "ldr r0, ={top}",
+    "bic r0, r0, #7",
+    "msr msp, r0",
+    "b {handler}",
+    ".ltorg",
+    ".size HardFault, . - HardFault",
+    top = sym _stack_start,
+    handler = sym hard_fault,
+);
+
+extern "C" {
+    static _stack_start: u32;
+}
+
+/// The HardFault handler proper, on a fresh stack: safe state first.
+extern "C" fn hard_fault() -> ! {
     regs::force_safe();
     regs::usart_write_raw(b"HARDFAULT\r\n");
+    let mut line = LineBuf::new();
+    let _ = writeln!(line, "CANARY {:08x}\r", CANARY.load(Ordering::Relaxed));
+    regs::usart_write_raw(line.as_bytes());
     fault_stop(b"")
 }

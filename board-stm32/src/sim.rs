@@ -15,7 +15,9 @@
 //! - `inputs`: each of the eight safety inputs in turn (arm, drive, input active, one tick);
 //! - `stall`: the loop stalls for [`Supervisor::MAX_MISSED`] periods (tolerated), then for
 //!   one more (overrun: safe state, the watchdog no longer fed);
-//! - `hardfault`: a few periods, then an undefined instruction (HardFault).
+//! - `hardfault`: a few periods, then an undefined instruction (HardFault);
+//! - `overflow`: a few periods, then a runaway recursion (stack overflow: with flip-link a
+//!   HardFault at the start of RAM, the statics untouched).
 
 use crate::{tick_counts, wait_tick, Log};
 use board_stm32::guard;
@@ -23,6 +25,7 @@ use board_stm32::regs::{self, PwmTimer};
 use board_stm32::safety_pins::{
     inputs_from_idr, ALL_SAFETY_PINS, DRIVER_FAULT_PIN, ESTOP_PIN, LIMIT_PINS,
 };
+use board_stm32::stack;
 use core::cell::RefCell;
 use core::fmt::Write;
 use cortex_m_semihosting::debug;
@@ -47,6 +50,7 @@ enum Mode {
     Inputs,
     Stall,
     HardFault,
+    Overflow,
 }
 
 /// Reads the semihosting command line (QEMU `-semihosting-config arg=...`).
@@ -62,6 +66,8 @@ fn mode() -> Mode {
     let has = |w: &[u8]| line.windows(w.len()).any(|x| x == w);
     if has(b"hardfault") {
         Mode::HardFault
+    } else if has(b"overflow") {
+        Mode::Overflow
     } else if has(b"estop") {
         Mode::EStop
     } else if has(b"inputs") {
@@ -174,12 +180,16 @@ pub fn run<W: Write>(_rcc: &mut Rcc, log: &mut Log<W>) -> i32 {
         Mode::Stall => return stall(&mut io, log),
         _ => {}
     }
-    if mode == Mode::HardFault {
+    if mode == Mode::HardFault || mode == Mode::Overflow {
         for _ in 0..5 {
-            let _ = io.write([3.0, -2.0, 1.5]);
+            let _ = io.write(DRIVE);
             io.wait();
         }
         report_pwm(log, "BEFORE");
+        if mode == Mode::Overflow {
+            let _ = writeln!(log, "OVERFLOW");
+            return recurse(u32::MAX) as i32;
+        }
         // SAFETY: deliberately executes a permanently undefined instruction: the HardFault
         // handler must leave the PWM at 0 (checked by the host test).
         unsafe { core::arch::asm!("udf #0") };
@@ -195,6 +205,13 @@ pub fn run<W: Write>(_rcc: &mut Rcc, log: &mut Log<W>) -> i32 {
     );
     let _ = writeln!(log, "SUPERVISOR {:?} feeds={}", io.sup.state(), io.feeds);
     report_pwm(log, "BEFORE");
+    let layout = stack::Layout::linked();
+    let _ = writeln!(
+        log,
+        "STACK used={} reserved={}",
+        stack::high_water(&layout),
+        layout.reserved()
+    );
     if !matches!(res, Ok(Some(_))) {
         return 6;
     }
@@ -335,4 +352,16 @@ fn stall<W: Write>(io: &mut SimIo<'_>, log: &mut Log<W>) -> i32 {
         );
     }
     0
+}
+
+/// A runaway recursion with small frames (about 32 bytes a level: without flip-link it would
+/// write over every static on its way down before faulting below RAM).
+#[inline(never)]
+fn recurse(depth: u32) -> u32 {
+    let mut buf = [depth; 4];
+    core::hint::black_box(&mut buf);
+    if depth == 0 {
+        return buf[0];
+    }
+    recurse(depth - 1).wrapping_add(core::hint::black_box(buf[1]))
 }

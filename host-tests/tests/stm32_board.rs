@@ -28,6 +28,15 @@ use std::path::PathBuf;
 use std::process::{Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
+/// Stack budget of the QEMU build's run [bytes]: 24 KiB, half again the high-water mark
+/// measured when it was set (15,452 bytes), and at most a fifth of the stack reserved in the
+/// 128 KiB of RAM (131,040 bytes: everything but the 32 bytes of statics).
+const STACK_BUDGET: usize = 24 * 1024;
+
+/// How to build the ELF these tests run (flip-link as the linker).
+const BUILD: &str = "cargo rustc -p board-stm32 --bin board-stm32 --target thumbv7em-none-eabihf \
+     --release -- -C linker=flip-link";
+
 fn workspace_root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .parent()
@@ -46,9 +55,9 @@ fn board_elf() -> PathBuf {
         });
     assert!(
         elf.is_file(),
-        "board ELF not found at {}: build it first with \
-         `cargo build -p board-stm32 --target thumbv7em-none-eabihf --release` \
-         (the default features: the QEMU build; or point BOARD_ELF at it)",
+        "board ELF not found at {}: build it first with `{BUILD}` \
+         (the default features: the QEMU build; `cargo install flip-link` if missing; or \
+         point BOARD_ELF at it)",
         elf.display()
     );
     elf
@@ -181,7 +190,23 @@ fn stm32_trajectory_matches_host_and_a_forced_panic_zeroes_the_pwm() {
     assert!(fw.contains("SUPERVISOR Run"), "{fw}");
     // the loop fed the watchdog once per period, from the period loop
     assert_eq!(field(&fw, "SUPERVISOR ", "feeds"), "4000");
-    // 3. the forced panic: PWM running before, compare registers and outputs 0 after
+    // 3. the painted stack's high-water mark over the whole run (4000 periods, the timer
+    //    interrupt, the formatting of every line) within its budget
+    let used: usize = field(&fw, "STACK ", "used").parse().expect("stack used");
+    let reserved: usize = field(&fw, "STACK ", "reserved").parse().expect("reserved");
+    assert!(
+        used > 1024,
+        "the paint was not overwritten at all: {used} bytes"
+    );
+    assert!(
+        used <= STACK_BUDGET,
+        "stack high-water mark {used} bytes over the budget {STACK_BUDGET}"
+    );
+    assert!(
+        STACK_BUDGET * 5 <= reserved,
+        "budget {STACK_BUDGET} not a fifth of the {reserved} bytes reserved"
+    );
+    // 4. the forced panic: PWM running before, compare registers and outputs 0 after
     let before = ccr(&fw, "BEFORE ");
     assert!(
         before.iter().any(|&c| c > 0),
@@ -315,4 +340,52 @@ fn stm32_a_stalled_loop_trips_overrun_and_stops_feeding_the_watchdog() {
     assert_eq!(ccr(bad, "STALL "), [0, 0, 0]);
     assert_eq!(field(bad, "STALL ", "ccer"), "0");
     assert!(status.success(), "{fw}");
+}
+
+/// A hexadecimal field of the `LAYOUT` line: `key=lo..hi`.
+fn range(fw: &str, key: &str) -> (u32, u32) {
+    let v = field(fw, "LAYOUT ", key);
+    let (lo, hi) = v.split_once("..").expect("lo..hi");
+    (
+        u32::from_str_radix(lo, 16).expect("hex"),
+        u32::from_str_radix(hi, 16).expect("hex"),
+    )
+}
+
+#[test]
+#[ignore = "needs qemu-system-arm and the board ELF; run by scripts/test.sh"]
+fn stm32_a_stack_overflow_faults_into_the_safe_state_leaving_the_statics_intact() {
+    let (status, fw) = run_board("overflow");
+    assert!(fw.contains("MODE Overflow"), "{fw}");
+    // flip-link's layout: the stack at the bottom of RAM (0x2000_0000), the statics above it
+    let (stack_lo, stack_hi) = range(&fw, "stack");
+    let (data_lo, data_hi) = range(&fw, "statics");
+    assert!(
+        field(&fw, "LAYOUT ", "below_statics") == "true" && stack_hi <= data_lo,
+        "the stack is not below .data/.bss: the ELF was not linked with flip-link; \
+         build it with `{BUILD}`\n{fw}"
+    );
+    assert_eq!(
+        stack_lo, 0x2000_0000,
+        "the stack must end at the start of RAM"
+    );
+    assert_eq!(
+        data_hi, 0x2002_0000,
+        "the statics end at the end of the 128 KiB RAM"
+    );
+    // the runaway recursion: a HardFault (not a lockup, not silent corruption), the safe
+    // state, and the canary static intact (a plain link overwrites it on the way down)
+    assert!(
+        ccr(&fw, "BEFORE ").iter().all(|&c| c > 0),
+        "PWM not driven before"
+    );
+    assert!(fw.contains("OVERFLOW\nHARDFAULT\n"), "{fw}");
+    let canary = fw
+        .lines()
+        .find_map(|l| l.strip_prefix("CANARY "))
+        .expect("CANARY line");
+    assert_eq!(canary, "5afec0de", "a static was overwritten by the stack");
+    assert_eq!(ccr(&fw, "SAFE "), [0, 0, 0]);
+    assert_eq!(field(&fw, "SAFE ", "ccer"), "0");
+    assert!(!status.success());
 }
