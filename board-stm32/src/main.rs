@@ -8,16 +8,19 @@
 //! - A timer interrupt every 2 ms (TIM7 on the board, TIM5 under QEMU) latches the encoder
 //!   counters and releases the period; the loop counts overruns ([`TickLatch`], `u64`).
 //! - The twin is `F32x` (f32 with FPU-only sine/cosine); f64 stays the offline reference.
-//! - Safety: [`Supervisor`] (e-stop, limit switches, driver fault, overruns) gates every
-//!   command; the panic and HardFault handlers call [`regs::force_safe`] before anything
-//!   else; the independent watchdog (about 10 ms) is fed once per period; DBGMCU freezes the
-//!   timers while a debugger halts the core.
+//! - Safety: the supervisor (e-stop, limit switches, driver fault, overruns) gates every
+//!   command through `board_stm32::guard`; the panic and HardFault handlers call
+//!   [`regs::force_safe`] before anything else (the HardFault entry resets the stack pointer
+//!   first: a stack overflow with flip-link's layout faults below RAM); the independent
+//!   watchdog (10 ms nominal) is fed once per period while the loop keeps its period, and a
+//!   watchdog reset keeps the board safe until power-cycled; DBGMCU freezes the timers while
+//!   a debugger halts the core.
 //! - Log: text lines over USART2 (115200 8N1); with `probe`, also defmt over RTT.
 //!
 //! The default build is the QEMU one: the plant is the model itself (`SimPlant`), the PWM
 //! duties are mirrored into TIM3's compare registers, and the run ends with a forced panic
-//! (or, with the semihosting argument `hardfault` or `estop`, with those paths) so the host
-//! tests `host-tests/tests/stm32_board.rs` can check the safe state.
+//! (or, with a semihosting argument, another path: `src/sim.rs`) so the host tests
+//! `host-tests/tests/stm32_board.rs` can check the safe state.
 #![no_std]
 #![no_main]
 

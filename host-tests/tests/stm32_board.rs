@@ -9,10 +9,12 @@
 //! too. Each run ends through a fault path, selected by the semihosting argument:
 //! a forced panic (default), a HardFault (`hardfault`) or the e-stop input (`estop`); the
 //! firmware reads TIM3's compare registers back (QEMU models TIM2-5; the board's TIM1 is
-//! written the same way) and prints them.
+//! written the same way) and prints them. Further runs drive every safety input, stall the
+//! loop (overrun, watchdog feeds) and overflow the stack (flip-link's layout).
 //!
-//! Run by `scripts/test.sh` after `cargo build -p board-stm32 --target thumbv7em-none-eabihf
-//! --release`; `BOARD_ELF` overrides the ELF's path.
+//! Run by `scripts/test.sh` after `cargo rustc -p board-stm32 --bin board-stm32 --target
+//! thumbv7em-none-eabihf --release -- -C linker=flip-link` ([`BUILD`]); `BOARD_ELF` overrides
+//! the ELF's path.
 
 // crane-twin's `defmt` feature (derives only) does not exist in this crate.
 #![allow(unexpected_cfgs)]
