@@ -207,16 +207,18 @@ pub fn run<W: Write>(p: Parts<'_, W>) -> i32 {
         return 2;
     };
     let mut k: u32 = 0;
+    // the stack's high-water mark, 256 words (about 11 us) a period
+    let mut stack_use = stack::HighWater::new(stack::Layout::linked());
     loop {
         let t = f64::from(k) * cfg.period;
         let _ = ctrl.run_period(&mut io, &DEMO.at::<F32x>(t));
+        let stack = stack_use.step(256);
         if k % 500 == 0 {
             let (ticks, overruns) = crate::tick_counts();
             let _ = writeln!(
                 log,
-                "P {k} state={:?} ticks={ticks} overruns={overruns} stack={}",
+                "P {k} state={:?} ticks={ticks} overruns={overruns} stack={stack}",
                 io.sup.state(),
-                stack::high_water(&stack::Layout::linked())
             );
         }
         k = k.wrapping_add(1);

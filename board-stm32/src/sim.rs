@@ -206,9 +206,12 @@ pub fn run<W: Write>(_rcc: &mut Rcc, log: &mut Log<W>) -> i32 {
     let _ = writeln!(log, "SUPERVISOR {:?} feeds={}", io.sup.state(), io.feeds);
     report_pwm(log, "BEFORE");
     let layout = stack::Layout::linked();
+    // the full scan, and the board's sweep run to its end: the same figure
+    let mut sweep = stack::HighWater::new(layout);
+    let swept = (0..1_000).map(|_| sweep.step(256)).last().unwrap_or(0);
     let _ = writeln!(
         log,
-        "STACK used={} reserved={}",
+        "STACK used={} swept={swept} reserved={}",
         stack::high_water(&layout),
         layout.reserved()
     );
