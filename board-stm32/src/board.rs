@@ -217,8 +217,9 @@ pub fn run<W: Write>(p: Parts<'_, W>) -> i32 {
             let (ticks, overruns) = crate::tick_counts();
             let _ = writeln!(
                 log,
-                "P {k} state={:?} ticks={ticks} overruns={overruns} stack={stack}",
+                "P {k} state={:?} ticks={ticks} overruns={overruns} stack={stack} log_dropped={}",
                 io.sup.state(),
+                crate::log_dropped()
             );
         }
         k = k.wrapping_add(1);

@@ -10,4 +10,5 @@ pub mod guard;
 pub mod regs;
 pub mod safety_pins;
 pub mod stack;
+pub mod txqueue;
 pub mod watchdog;

@@ -31,6 +31,8 @@ mod sim;
 
 use board_stm32::regs::{self, PERIOD_US};
 use board_stm32::stack;
+#[cfg(feature = "board")]
+use board_stm32::txqueue::TxQueue;
 use board_stm32::watchdog::{self, ResetCause};
 use core::cell::RefCell;
 use core::fmt::Write;
@@ -106,6 +108,56 @@ const PERIOD_IRQ: pac::Interrupt = pac::Interrupt::TIM7;
 #[cfg(not(feature = "board"))]
 const PERIOD_IRQ: pac::Interrupt = pac::Interrupt::TIM5;
 
+/// The board's log queue, emptied by the USART2 interrupt.
+#[cfg(feature = "board")]
+static TXQ: Mutex<RefCell<TxQueue<1024>>> = Mutex::new(RefCell::new(TxQueue::new()));
+
+/// Writes into [`TXQ`] and wakes the USART2 interrupt (never blocks; drops what does not fit).
+#[cfg(feature = "board")]
+pub struct QueuedTx;
+
+#[cfg(feature = "board")]
+impl Write for QueuedTx {
+    fn write_str(&mut self, s: &str) -> core::fmt::Result {
+        cortex_m::interrupt::free(|cs| {
+            if let Ok(mut q) = TXQ.borrow(cs).try_borrow_mut() {
+                q.push(s.as_bytes());
+                regs::usart_tx_interrupt_enable(true);
+            }
+        });
+        Ok(())
+    }
+}
+
+/// Log bytes dropped because the queue was full (board).
+#[cfg(feature = "board")]
+pub fn log_dropped() -> u64 {
+    cortex_m::interrupt::free(|cs| TXQ.borrow(cs).borrow().dropped())
+}
+
+#[cfg(feature = "board")]
+#[interrupt]
+fn USART2() {
+    cortex_m::interrupt::free(|cs| {
+        if let Ok(mut q) = TXQ.borrow(cs).try_borrow_mut() {
+            regs::usart_tx_interrupt(|| q.pop());
+        }
+    });
+}
+
+/// Sends what is still queued, blocking (fault handlers, interrupts off).
+fn flush_log_queue() {
+    #[cfg(feature = "board")]
+    cortex_m::interrupt::free(|cs| {
+        if let Ok(mut q) = TXQ.borrow(cs).try_borrow_mut() {
+            regs::usart_tx_interrupt_enable(false);
+            while let Some(b) = q.pop() {
+                regs::usart_write_raw(&[b]);
+            }
+        }
+    });
+}
+
 /// The log line: USART2 through the HAL; with `probe` each line also as a defmt frame.
 pub struct Log<W: Write> {
     uart: W,
@@ -180,6 +232,20 @@ fn main() -> ! {
     let Ok(tx) = dp.USART2.tx(gpioa.pa2, 115_200.bps(), &mut rcc) else {
         fault_stop(b"PANIC usart\r\n");
     };
+    // The board queues its log and sends it from the USART interrupt (a line never blocks
+    // the period); the QEMU build writes through (its USART has no baud-rate delay, and the
+    // transcript must be complete).
+    #[cfg(feature = "board")]
+    let mut log = {
+        let _configured: stm32f4xx_hal::serial::Tx<pac::USART2, u8> = tx;
+        // SAFETY: the handler only touches the log queue (under a lock) and USART2.
+        unsafe {
+            cp.NVIC.set_priority(pac::Interrupt::USART2, 0x80);
+            cortex_m::peripheral::NVIC::unmask(pac::Interrupt::USART2);
+        }
+        Log::new(QueuedTx)
+    };
+    #[cfg(not(feature = "board"))]
     let mut log = Log::new(tx);
     let _ = writeln!(
         log,
@@ -326,6 +392,7 @@ fn panic(info: &PanicInfo) -> ! {
     // Outputs off and driver disabled before anything else (formatting could fault).
     regs::force_safe();
     cortex_m::interrupt::disable();
+    flush_log_queue();
     let mut line = LineBuf::new();
     let _ = writeln!(line, "PANIC {}\r", info.message());
     regs::usart_write_raw(line.as_bytes());
@@ -369,6 +436,7 @@ extern "C" {
 /// The HardFault handler proper, on a fresh stack: safe state first.
 extern "C" fn hard_fault() -> ! {
     regs::force_safe();
+    flush_log_queue();
     regs::usart_write_raw(b"HARDFAULT\r\n");
     let mut line = LineBuf::new();
     let _ = writeln!(line, "CANARY {:08x}\r", CANARY.load(Ordering::Relaxed));

@@ -255,6 +255,24 @@ pub fn watchdog_feed() {
     wr(IWDG_KR, 0xAAAA);
 }
 
+/// Sends the next byte on the log USART from its interrupt: `next` is asked for a byte only
+/// when the transmit register is empty; with none left the interrupt is switched off.
+pub fn usart_tx_interrupt(next: impl FnOnce() -> Option<u8>) {
+    if rd(USART2) & (1 << 7) == 0 {
+        return;
+    }
+    match next() {
+        Some(b) => wr(USART2 + 4, u32::from(b)),
+        None => usart_tx_interrupt_enable(false),
+    }
+}
+
+/// Switches the log USART's transmit-empty interrupt (`CR1.TXEIE`) on or off.
+pub fn usart_tx_interrupt_enable(on: bool) {
+    let cr1 = rd(USART2 + 0x0C) & !(1 << 7);
+    wr(USART2 + 0x0C, cr1 | (u32::from(on) << 7));
+}
+
 /// Blocking write of bytes to the log USART from a fault handler (no HAL object). Bounded:
 /// gives up on a byte after 100,000 polls of `TXE`.
 pub fn usart_write_raw(bytes: &[u8]) {

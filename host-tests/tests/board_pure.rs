@@ -1,9 +1,9 @@
 //! The pure parts of the STM32 board firmware (`board-stm32`, built only for the target),
 //! included here verbatim with `#[path]`: the safety pins' decoding, the independent
-//! watchdog's configuration over the LSI range and the reset-cause latch, and the timers a
-//! debugger halt freezes. QEMU does not model the GPIO, the IWDG or DBGMCU; these are the
-//! values the firmware writes and the decisions it takes (`host-tests/tests/stm32_board.rs`
-//! runs the rest under QEMU).
+//! watchdog's configuration over the LSI range and the reset-cause latch, the timers a
+//! debugger halt freezes, and the board's log queue. QEMU does not model the GPIO, the IWDG
+//! or DBGMCU; these are the values the firmware writes and the decisions it takes
+//! (`host-tests/tests/stm32_board.rs` runs the rest under QEMU).
 
 // `regs.rs` has the board/QEMU variants behind the crate's `board` feature (absent here:
 // the QEMU variants), and register accessors this test never calls.
@@ -15,6 +15,8 @@ mod debug_freeze;
 mod regs;
 #[path = "../../board-stm32/src/safety_pins.rs"]
 mod safety_pins;
+#[path = "../../board-stm32/src/txqueue.rs"]
+mod txqueue;
 #[path = "../../board-stm32/src/watchdog.rs"]
 mod watchdog;
 
@@ -226,4 +228,30 @@ fn a_debugger_halt_freezes_every_timer_in_use_and_the_watchdog() {
     let apb2_defined: u32 = 0b11 | (0b111 << 16);
     assert_eq!(debug_freeze::APB1_FREEZE & !apb1_defined, 0);
     assert_eq!(debug_freeze::APB2_FREEZE & !apb2_defined, 0);
+}
+
+// ---- log queue -------------------------------------------------------------------------------
+
+#[test]
+fn the_log_queue_keeps_order_across_the_wrap_and_counts_what_it_drops() {
+    let mut q = txqueue::TxQueue::<8>::new();
+    assert!(q.is_empty());
+    assert_eq!(q.pop(), None);
+    assert_eq!(q.push(b"abcde"), 5);
+    assert_eq!((q.pop(), q.pop()), (Some(b'a'), Some(b'b')));
+    // wraps: 3 left + 5 = 8, full
+    assert_eq!(q.push(b"fghij"), 5);
+    assert_eq!(q.len(), 8);
+    // full: the rest of a line is dropped, not blocked on
+    assert_eq!(q.push(b"XYZ"), 0);
+    assert_eq!(q.dropped(), 3);
+    let mut out = Vec::new();
+    while let Some(b) = q.pop() {
+        out.push(b);
+    }
+    assert_eq!(out, b"cdefghij");
+    assert!(q.is_empty());
+    // a long line into an empty queue: the first N bytes go, the rest counted
+    assert_eq!(q.push(b"0123456789"), 8);
+    assert_eq!(q.dropped(), 5);
 }
