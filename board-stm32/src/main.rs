@@ -308,8 +308,8 @@ fn main() -> ! {
     });
     #[cfg(not(feature = "board"))]
     let code = {
-        let _ = (reset, &mut cp);
-        sim::run(&mut rcc, &mut log)
+        let _ = &mut cp;
+        sim::run(&mut rcc, csr, &mut log)
     };
     let _ = writeln!(log, "DONE {code}");
     #[cfg(not(feature = "board"))]

@@ -15,6 +15,9 @@
 //! - `inputs`: each of the eight safety inputs in turn (arm, drive, input active, one tick);
 //! - `stall`: the loop stalls for [`Supervisor::MAX_MISSED`] periods (tolerated), then for
 //!   one more (overrun: safe state, the watchdog no longer fed);
+//! - `wdreset`: the start after a watchdog reset (QEMU's RCC reads 0: `RCC_CSR.IWDGRSTF` is
+//!   added to the word read): the supervisor refuses to arm, the loop runs to the end with
+//!   the outputs off and the watchdog fed, and re-arming is refused;
 //! - `hardfault`: a few periods, then an undefined instruction (HardFault);
 //! - `overflow`: a few periods, then a runaway recursion (stack overflow: with flip-link a
 //!   HardFault at the start of RAM, the statics untouched).
@@ -26,6 +29,7 @@ use board_stm32::safety_pins::{
     inputs_from_idr, ALL_SAFETY_PINS, DRIVER_FAULT_PIN, ESTOP_PIN, LIMIT_PINS,
 };
 use board_stm32::stack;
+use board_stm32::watchdog::{ResetCause, RCC_CSR_IWDGRSTF};
 use core::cell::RefCell;
 use core::fmt::Write;
 use cortex_m_semihosting::debug;
@@ -49,6 +53,7 @@ enum Mode {
     EStop,
     Inputs,
     Stall,
+    WatchdogReset,
     HardFault,
     Overflow,
 }
@@ -74,6 +79,8 @@ fn mode() -> Mode {
         Mode::Inputs
     } else if has(b"stall") {
         Mode::Stall
+    } else if has(b"wdreset") {
+        Mode::WatchdogReset
     } else {
         Mode::Panic
     }
@@ -150,15 +157,24 @@ impl Io for SimIo<'_> {
 }
 
 /// The QEMU run; returns the exit code (never returns in the panic and HardFault modes).
-pub fn run<W: Write>(_rcc: &mut Rcc, log: &mut Log<W>) -> i32 {
+/// `csr` is `RCC_CSR` as read at start.
+pub fn run<W: Write>(_rcc: &mut Rcc, csr: u32, log: &mut Log<W>) -> i32 {
     let mode = mode();
     let _ = writeln!(log, "MODE {mode:?}");
     let timer = RefCell::new(PwmTimer::init());
     let Ok(plant) = demo_plant() else {
         return 2;
     };
+    // the board's arming decision, on the reset flags (a watchdog reset synthesised)
+    let csr = if mode == Mode::WatchdogReset {
+        csr | RCC_CSR_IWDGRSTF
+    } else {
+        csr
+    };
     let mut sup = Supervisor::new();
-    if sup.arm(&inputs_from_idr(0)).is_err() {
+    let armed = ResetCause::from_rcc_csr(csr).arm(&mut sup, &inputs_from_idr(0));
+    let _ = writeln!(log, "ARM {armed:?} csr={csr:08x}");
+    if armed.is_err() && mode != Mode::WatchdogReset {
         return 3;
     }
     let Some(mut cp_nvic) = (unsafe { Some(cortex_m::Peripherals::steal().NVIC) }) else {
@@ -221,6 +237,15 @@ pub fn run<W: Write>(_rcc: &mut Rcc, log: &mut Log<W>) -> i32 {
     match mode {
         Mode::EStop => {
             if io.sup.state() == State::Safe(Cause::EStop) {
+                0
+            } else {
+                7
+            }
+        }
+        Mode::WatchdogReset => {
+            let rearm = io.sup.arm(&inputs_from_idr(0));
+            let _ = writeln!(log, "REARM {rearm:?}");
+            if io.sup.state() == State::Safe(Cause::WatchdogReset) {
                 0
             } else {
                 7

@@ -393,3 +393,32 @@ fn stm32_a_stack_overflow_faults_into_the_safe_state_leaving_the_statics_intact(
     assert_eq!(field(&fw, "SAFE ", "ccer"), "0");
     assert!(!status.success());
 }
+
+#[test]
+#[ignore = "needs qemu-system-arm and the board ELF; run by scripts/test.sh"]
+fn stm32_after_a_watchdog_reset_the_board_stays_safe() {
+    // QEMU's RCC reads 0: the firmware adds IWDGRSTF to the reset flags it read
+    let (status, fw) = run_board("wdreset");
+    assert!(fw.contains("MODE WatchdogReset"), "{fw}");
+    let arm = fw
+        .lines()
+        .find(|l| l.starts_with("ARM "))
+        .expect("ARM line");
+    assert!(arm.starts_with("ARM Err(WatchdogReset) "), "{arm}");
+    // the loop ran its 4000 periods (alive, the watchdog fed every period) with nothing
+    // reaching the drives: the trajectory is not the host's driven one
+    assert_eq!(field(&fw, "TICKS ", "periods"), "4000");
+    assert_eq!(field(&fw, "SUPERVISOR ", "feeds"), "4000");
+    assert!(fw.contains("SUPERVISOR Safe(WatchdogReset) "), "{fw}");
+    let host = host_loop();
+    let (a, b) = (loop_lines(&fw), loop_lines(&host));
+    let tag = "L 1000 ";
+    let f = a.iter().find(|l| l.starts_with(tag)).expect("board line");
+    let h = b.iter().find(|l| l.starts_with(tag)).expect("host line");
+    assert_ne!(f, h, "the drives were commanded after a watchdog reset");
+    assert_eq!(ccr(&fw, "BEFORE "), [0, 0, 0]);
+    assert_eq!(field(&fw, "BEFORE ", "ccer"), "0");
+    // and it cannot be re-armed: only a power-cycle clears the latch
+    assert!(fw.contains("REARM Err(WatchdogReset)"), "{fw}");
+    assert!(status.success(), "{fw}");
+}
