@@ -39,7 +39,7 @@ use core::fmt::Write;
 use core::panic::PanicInfo;
 use core::sync::atomic::{AtomicU32, Ordering};
 use cortex_m::interrupt::Mutex;
-use cortex_m_rt::entry;
+use cortex_m_rt::{entry, exception};
 use crane_twin::logic::safety::TickLatch;
 #[cfg(feature = "probe")]
 use defmt_rtt as _;
@@ -431,6 +431,20 @@ core::arch::global_asm!(
 
 extern "C" {
     static _stack_start: u32;
+}
+
+/// Any exception or interrupt without a handler of its own (an interrupt enabled by mistake,
+/// an NMI): safe state first, like a HardFault (cortex-m-rt's default would spin with the PWM
+/// running until the watchdog bites).
+#[exception]
+unsafe fn DefaultHandler(irqn: i16) {
+    regs::force_safe();
+    cortex_m::interrupt::disable();
+    flush_log_queue();
+    let mut line = LineBuf::new();
+    let _ = writeln!(line, "UNEXPECTED irq {irqn}\r");
+    regs::usart_write_raw(line.as_bytes());
+    fault_stop(b"")
 }
 
 /// The HardFault handler proper, on a fresh stack: safe state first.

@@ -19,6 +19,8 @@
 //!   added to the word read): the supervisor refuses to arm, the loop runs to the end with
 //!   the outputs off and the watchdog fed, and re-arming is refused;
 //! - `hardfault`: a few periods, then an undefined instruction (HardFault);
+//! - `irq`: a few periods, then an interrupt without a handler (USART3) is enabled and
+//!   pended (the default handler);
 //! - `overflow`: a few periods, then a runaway recursion (stack overflow: with flip-link a
 //!   HardFault at the start of RAM, the statics untouched).
 
@@ -55,6 +57,7 @@ enum Mode {
     Stall,
     WatchdogReset,
     HardFault,
+    UnexpectedIrq,
     Overflow,
 }
 
@@ -73,6 +76,8 @@ fn mode() -> Mode {
         Mode::HardFault
     } else if has(b"overflow") {
         Mode::Overflow
+    } else if has(b"irq") {
+        Mode::UnexpectedIrq
     } else if has(b"estop") {
         Mode::EStop
     } else if has(b"inputs") {
@@ -196,7 +201,7 @@ pub fn run<W: Write>(_rcc: &mut Rcc, csr: u32, log: &mut Log<W>) -> i32 {
         Mode::Stall => return stall(&mut io, log),
         _ => {}
     }
-    if mode == Mode::HardFault || mode == Mode::Overflow {
+    if matches!(mode, Mode::HardFault | Mode::Overflow | Mode::UnexpectedIrq) {
         for _ in 0..5 {
             let _ = io.write(DRIVE);
             io.wait();
@@ -205,6 +210,14 @@ pub fn run<W: Write>(_rcc: &mut Rcc, csr: u32, log: &mut Log<W>) -> i32 {
         if mode == Mode::Overflow {
             let _ = writeln!(log, "OVERFLOW");
             return recurse(u32::MAX) as i32;
+        }
+        if mode == Mode::UnexpectedIrq {
+            let irq = stm32f4xx_hal::pac::Interrupt::USART3;
+            cortex_m::peripheral::NVIC::pend(irq);
+            // SAFETY: deliberately enables an interrupt that has no handler: the default
+            // handler must leave the PWM at 0 (checked by the host test).
+            unsafe { cortex_m::peripheral::NVIC::unmask(irq) };
+            return 9;
         }
         // SAFETY: deliberately executes a permanently undefined instruction: the HardFault
         // handler must leave the PWM at 0 (checked by the host test).

@@ -422,3 +422,19 @@ fn stm32_after_a_watchdog_reset_the_board_stays_safe() {
     assert!(fw.contains("REARM Err(WatchdogReset)"), "{fw}");
     assert!(status.success(), "{fw}");
 }
+
+#[test]
+#[ignore = "needs qemu-system-arm and the board ELF; run by scripts/test.sh"]
+fn stm32_an_unexpected_interrupt_forces_the_safe_state() {
+    let (status, fw) = run_board("irq");
+    assert!(fw.contains("MODE UnexpectedIrq"), "{fw}");
+    assert!(
+        ccr(&fw, "BEFORE ").iter().all(|&c| c > 0),
+        "PWM not driven before"
+    );
+    // USART3 is interrupt 39 (cortex-m-rt's number: negative for core exceptions)
+    assert!(fw.contains("UNEXPECTED irq 39\n"), "{fw}");
+    assert_eq!(ccr(&fw, "SAFE "), [0, 0, 0]);
+    assert_eq!(field(&fw, "SAFE ", "ccer"), "0");
+    assert!(!status.success(), "{fw}");
+}
