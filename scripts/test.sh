@@ -35,18 +35,26 @@ timeout 300 cargo run -q -p firmware --target thumbv7em-none-eabihf --release > 
 tail -n 3 "$qemu_log"
 
 # --- board-stm32 (issue 14): the STM32F405/407 firmware. Lints every feature set, links the
-# real-board build (`board`: clock, TIM1 PWM, encoder timers, pins; `probe`: defmt over RTT),
-# then builds the QEMU netduinoplus2 build LAST (same ELF path) for
+# real-board build (`board`: clock, TIM1 PWM, encoder timers, pins; `probe`: defmt over RTT)
+# and the on-target tests, then the QEMU netduinoplus2 build LAST (same ELF path) for
 # host-tests/tests/stm32_board.rs (the `stm32_*` tests, run with --include-ignored below).
-step "board-stm32: clippy, board build, QEMU build"
+# Every board-stm32 link goes through flip-link (stack below .data/.bss: an overflow faults),
+# passed to this crate's links only (`cargo rustc -- -C linker=flip-link`): the firmware/
+# crate keeps the target's default linker. `cargo install flip-link` if missing: 16 s.
+step "board-stm32: clippy, flip-link, board build, QEMU build"
+if ! command -v flip-link >/dev/null 2>&1; then
+  step "installing flip-link (cargo install)"
+  cargo install flip-link --locked
+fi
 for feats in "" "board" "probe" "board,probe"; do
   cargo clippy -p board-stm32 --target thumbv7em-none-eabihf --features "$feats" -- -D warnings
 done
 cargo clippy -p board-stm32 --target thumbv7em-none-eabihf --features board,probe --all-targets -- -D warnings
-cargo build -p board-stm32 --target thumbv7em-none-eabihf --release --features board,probe
+board_link() { cargo rustc -p board-stm32 --target thumbv7em-none-eabihf --release "$@" -- -C linker=flip-link; }
+board_link --bin board-stm32 --features board,probe
 # the defmt-test on-target tests: built here, run on a board by `probe-rs run`
-cargo build -p board-stm32 --target thumbv7em-none-eabihf --release --features board,probe --tests
-cargo build -p board-stm32 --target thumbv7em-none-eabihf --release
+board_link --test on_target --features board,probe
+board_link --bin board-stm32
 # --- end board-stm32
 
 step "host tests (including the QEMU cross-checks, marked ignored for plain cargo test)"

@@ -17,7 +17,11 @@
 //! | log | PA2 | USART2 TX (the Nucleo's ST-LINK virtual COM port) |
 
 use crate::{latched_counts, start_ticks, wait_tick, Log};
+use board_stm32::guard;
 use board_stm32::regs::{self, PwmTimer};
+use board_stm32::safety_pins::inputs_from_idr;
+use board_stm32::stack;
+use board_stm32::watchdog::ResetCause;
 use core::cell::RefCell;
 use core::fmt::Write;
 use crane_model::Params;
@@ -25,13 +29,12 @@ use crane_twin::hal::{DriveSet, HBridge};
 use crane_twin::logic::control::{Controller, Io, IoError, LoopConfig, DEMO};
 use crane_twin::logic::fastmath::F32x;
 use crane_twin::logic::plant::demo_twin_init;
-use crane_twin::logic::safety::{extend_count, Cause, Inputs, State, Supervisor};
+use crane_twin::logic::safety::{extend_count, Cause, State, Supervisor};
 use crane_twin::preload::ZeroNowChannel;
 use stm32f4xx_hal::gpio::{gpioa, gpiob, gpioc, AnyPin, Input, Output};
 use stm32f4xx_hal::pac;
 use stm32f4xx_hal::qei::Qei;
 use stm32f4xx_hal::rcc::{Enable, Rcc, Reset};
-use stm32f4xx_hal::watchdog::IndependentWatchdog;
 
 /// The port A pins the board uses (PA2 went to the USART).
 pub struct GpioA {
@@ -59,8 +62,7 @@ pub struct Parts<'a, W: Write> {
     pub tim8: pac::TIM8,
     pub rcc: &'a mut Rcc,
     pub nvic: &'a mut cortex_m::peripheral::NVIC,
-    pub wdg: &'a mut IndependentWatchdog,
-    pub watchdog_reset: bool,
+    pub reset: ResetCause,
     pub log: &'a mut Log<W>,
 }
 
@@ -71,27 +73,11 @@ struct BoardIo<'a> {
     drives: (Bridge<'a>, Bridge<'a>, Bridge<'a>),
     enable: AnyPin<Output>,
     brake: AnyPin<Output>,
-    estop: AnyPin<Input>,
-    fault: AnyPin<Input>,
-    limits: [AnyPin<Input>; 6],
+    /// The safety inputs (PB0, PB1, PB8-PB13), configured as pull-up inputs and read all at
+    /// once through `GPIOB_IDR` ([`regs::safety_port`]).
+    _safety_pins: [AnyPin<Input>; 8],
     counts: [i32; 5],
     sup: Supervisor,
-    wdg: &'a mut IndependentWatchdog,
-    missed: u64,
-}
-
-impl BoardIo<'_> {
-    fn inputs(&mut self) -> Inputs {
-        let mut i = Inputs {
-            estop: self.estop.is_high(),
-            driver_fault: self.fault.is_high(),
-            limits: [[false; 2]; 3],
-        };
-        for (k, pin) in self.limits.iter_mut().enumerate() {
-            i.limits[k / 2][k % 2] = pin.is_high();
-        }
-        i
-    }
 }
 
 impl Io for BoardIo<'_> {
@@ -104,10 +90,8 @@ impl Io for BoardIo<'_> {
     }
 
     fn write(&mut self, u: [f64; 3]) -> Result<[f64; 3], IoError> {
-        let inputs = self.inputs();
-        let state = self.sup.check(&inputs, self.missed);
-        if let State::Safe(_) = state {
-            regs::force_safe();
+        // the inputs sampled again right before the outputs (missed periods: see `wait`)
+        if let State::Safe(_) = guard::check(&mut self.sup, regs::safety_port(), 0) {
             self.enable.set_low();
             self.brake.set_low();
             return Ok([0.0; 3]);
@@ -122,8 +106,8 @@ impl Io for BoardIo<'_> {
     }
 
     fn wait(&mut self) {
-        self.wdg.feed();
-        self.missed = wait_tick();
+        let missed = wait_tick();
+        guard::at_tick(&mut self.sup, regs::safety_port(), missed);
     }
 }
 
@@ -143,8 +127,7 @@ pub fn run<W: Write>(p: Parts<'_, W>) -> i32 {
         tim8,
         rcc,
         nvic,
-        wdg,
-        watchdog_reset,
+        reset,
         log,
     } = p;
     // Safe levels on the driver lines before anything is enabled.
@@ -196,9 +179,9 @@ pub fn run<W: Write>(p: Parts<'_, W>) -> i32 {
         ),
         enable,
         brake,
-        estop: gpiob.pb0.into_pull_up_input().erase(),
-        fault: gpiob.pb1.into_pull_up_input().erase(),
-        limits: [
+        _safety_pins: [
+            gpiob.pb0.into_pull_up_input().erase(),
+            gpiob.pb1.into_pull_up_input().erase(),
             gpiob.pb8.into_pull_up_input().erase(),
             gpiob.pb9.into_pull_up_input().erase(),
             gpiob.pb10.into_pull_up_input().erase(),
@@ -208,19 +191,12 @@ pub fn run<W: Write>(p: Parts<'_, W>) -> i32 {
         ],
         counts: [0; 5],
         sup: Supervisor::new(),
-        wdg,
-        missed: 0,
     };
     start_ticks(nvic);
     // Arm only after a clean reset and with every input clear; after a watchdog reset stay
     // safe until power-cycled.
-    let inputs = io.inputs();
-    let armed = if watchdog_reset {
-        io.sup.trip(Cause::WatchdogReset);
-        Err(Cause::WatchdogReset)
-    } else {
-        io.sup.arm(&inputs)
-    };
+    let inputs = inputs_from_idr(regs::safety_port());
+    let armed = reset.arm(&mut io.sup, &inputs);
     let _ = writeln!(log, "ARM {armed:?} inputs={inputs:?}");
     if armed.is_ok() {
         io.enable.set_high();
@@ -231,15 +207,19 @@ pub fn run<W: Write>(p: Parts<'_, W>) -> i32 {
         return 2;
     };
     let mut k: u32 = 0;
+    // the stack's high-water mark, 256 words (about 11 us) a period
+    let mut stack_use = stack::HighWater::new(stack::Layout::linked());
     loop {
         let t = f64::from(k) * cfg.period;
         let _ = ctrl.run_period(&mut io, &DEMO.at::<F32x>(t));
+        let stack = stack_use.step(256);
         if k % 500 == 0 {
             let (ticks, overruns) = crate::tick_counts();
             let _ = writeln!(
                 log,
-                "P {k} state={:?} ticks={ticks} overruns={overruns}",
-                io.sup.state()
+                "P {k} state={:?} ticks={ticks} overruns={overruns} stack={stack} log_dropped={}",
+                io.sup.state(),
+                crate::log_dropped()
             );
         }
         k = k.wrapping_add(1);

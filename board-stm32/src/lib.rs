@@ -4,5 +4,11 @@
 //! --test on_target` with the probe-rs runner).
 #![no_std]
 
+pub mod debug_freeze;
+pub mod guard;
 #[cfg_attr(not(feature = "board"), allow(dead_code))]
 pub mod regs;
+pub mod safety_pins;
+pub mod stack;
+pub mod txqueue;
+pub mod watchdog;

@@ -8,16 +8,19 @@
 //! - A timer interrupt every 2 ms (TIM7 on the board, TIM5 under QEMU) latches the encoder
 //!   counters and releases the period; the loop counts overruns ([`TickLatch`], `u64`).
 //! - The twin is `F32x` (f32 with FPU-only sine/cosine); f64 stays the offline reference.
-//! - Safety: [`Supervisor`] (e-stop, limit switches, driver fault, overruns) gates every
-//!   command; the panic and HardFault handlers call [`regs::force_safe`] before anything
-//!   else; the independent watchdog (about 10 ms) is fed once per period; DBGMCU freezes the
-//!   timers while a debugger halts the core.
+//! - Safety: the supervisor (e-stop, limit switches, driver fault, overruns) gates every
+//!   command through `board_stm32::guard`; the panic and HardFault handlers call
+//!   [`regs::force_safe`] before anything else (the HardFault entry resets the stack pointer
+//!   first: a stack overflow with flip-link's layout faults below RAM); the independent
+//!   watchdog (10 ms nominal) is fed once per period while the loop keeps its period, and a
+//!   watchdog reset keeps the board safe until power-cycled; DBGMCU freezes the timers while
+//!   a debugger halts the core.
 //! - Log: text lines over USART2 (115200 8N1); with `probe`, also defmt over RTT.
 //!
 //! The default build is the QEMU one: the plant is the model itself (`SimPlant`), the PWM
 //! duties are mirrored into TIM3's compare registers, and the run ends with a forced panic
-//! (or, with the semihosting argument `hardfault` or `estop`, with those paths) so the host
-//! tests `host-tests/tests/stm32_board.rs` can check the safe state.
+//! (or, with a semihosting argument, another path: `src/sim.rs`) so the host tests
+//! `host-tests/tests/stm32_board.rs` can check the safe state.
 #![no_std]
 #![no_main]
 
@@ -26,12 +29,17 @@ mod board;
 #[cfg(not(feature = "board"))]
 mod sim;
 
-use board_stm32::regs;
+use board_stm32::regs::{self, PERIOD_US};
+use board_stm32::stack;
+#[cfg(feature = "board")]
+use board_stm32::txqueue::TxQueue;
+use board_stm32::watchdog::{self, ResetCause};
 use core::cell::RefCell;
 use core::fmt::Write;
 use core::panic::PanicInfo;
+use core::sync::atomic::{AtomicU32, Ordering};
 use cortex_m::interrupt::Mutex;
-use cortex_m_rt::{entry, exception, ExceptionFrame};
+use cortex_m_rt::{entry, exception};
 use crane_twin::logic::safety::TickLatch;
 #[cfg(feature = "probe")]
 use defmt_rtt as _;
@@ -42,9 +50,6 @@ use stm32f4xx_hal::prelude::*;
 static TICKS: Mutex<RefCell<TickLatch>> = Mutex::new(RefCell::new(TickLatch::new()));
 /// Encoder counters latched at the last tick (board).
 static LATCHED: Mutex<RefCell<[u16; 5]>> = Mutex::new(RefCell::new([0; 5]));
-
-/// Control period [us].
-pub const PERIOD_US: u32 = 2_000;
 
 /// Waits (WFI) for the next tick; returns the periods missed since the previous one taken.
 pub fn wait_tick() -> u64 {
@@ -103,6 +108,56 @@ const PERIOD_IRQ: pac::Interrupt = pac::Interrupt::TIM7;
 #[cfg(not(feature = "board"))]
 const PERIOD_IRQ: pac::Interrupt = pac::Interrupt::TIM5;
 
+/// The board's log queue, emptied by the USART2 interrupt.
+#[cfg(feature = "board")]
+static TXQ: Mutex<RefCell<TxQueue<1024>>> = Mutex::new(RefCell::new(TxQueue::new()));
+
+/// Writes into [`TXQ`] and wakes the USART2 interrupt (never blocks; drops what does not fit).
+#[cfg(feature = "board")]
+pub struct QueuedTx;
+
+#[cfg(feature = "board")]
+impl Write for QueuedTx {
+    fn write_str(&mut self, s: &str) -> core::fmt::Result {
+        cortex_m::interrupt::free(|cs| {
+            if let Ok(mut q) = TXQ.borrow(cs).try_borrow_mut() {
+                q.push(s.as_bytes());
+                regs::usart_tx_interrupt_enable(true);
+            }
+        });
+        Ok(())
+    }
+}
+
+/// Log bytes dropped because the queue was full (board).
+#[cfg(feature = "board")]
+pub fn log_dropped() -> u64 {
+    cortex_m::interrupt::free(|cs| TXQ.borrow(cs).borrow().dropped())
+}
+
+#[cfg(feature = "board")]
+#[interrupt]
+fn USART2() {
+    cortex_m::interrupt::free(|cs| {
+        if let Ok(mut q) = TXQ.borrow(cs).try_borrow_mut() {
+            regs::usart_tx_interrupt(|| q.pop());
+        }
+    });
+}
+
+/// Sends what is still queued, blocking (fault handlers, interrupts off).
+fn flush_log_queue() {
+    #[cfg(feature = "board")]
+    cortex_m::interrupt::free(|cs| {
+        if let Ok(mut q) = TXQ.borrow(cs).try_borrow_mut() {
+            regs::usart_tx_interrupt_enable(false);
+            while let Some(b) = q.pop() {
+                regs::usart_write_raw(&[b]);
+            }
+        }
+    });
+}
+
 /// The log line: USART2 through the HAL; with `probe` each line also as a defmt frame.
 pub struct Log<W: Write> {
     uart: W,
@@ -137,13 +192,21 @@ impl<W: Write> Write for Log<W> {
 #[entry]
 fn main() -> ! {
     // Outputs are off at reset (timers disabled, GPIO inputs): nothing to undo first.
+    // The free stack painted for its high-water mark (interrupts are still off).
+    let layout = stack::Layout::linked();
+    stack::paint(&layout);
+    // (an opaque store: the compiler cannot fold the static into flash)
+    CANARY.store(core::hint::black_box(CANARY_VALUE), Ordering::Relaxed);
     let (Some(dp), Some(mut cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
         fault_stop(b"PANIC peripherals taken twice\r\n");
     };
-    // Reset cause (RCC_CSR): after a watchdog reset the supervisor is not armed again.
-    let csr = dp.RCC.csr().read().bits();
-    let watchdog_reset = csr & (1 << 29) != 0;
-    dp.RCC.csr().modify(|_, w| w.rmvf().set_bit());
+    // Reset cause (RCC_CSR): after a watchdog reset the supervisor is not armed again, and the
+    // flags stay set so that only a power-cycle clears them.
+    let csr = regs::rcc_csr();
+    let reset = ResetCause::from_rcc_csr(csr);
+    if reset.clear_flags {
+        regs::clear_reset_flags();
+    }
     #[cfg(feature = "rcc")]
     let mut rcc = {
         // Flash latency and the ART accelerator first, before the clock goes up.
@@ -169,6 +232,20 @@ fn main() -> ! {
     let Ok(tx) = dp.USART2.tx(gpioa.pa2, 115_200.bps(), &mut rcc) else {
         fault_stop(b"PANIC usart\r\n");
     };
+    // The board queues its log and sends it from the USART interrupt (a line never blocks
+    // the period); the QEMU build writes through (its USART has no baud-rate delay, and the
+    // transcript must be complete).
+    #[cfg(feature = "board")]
+    let mut log = {
+        let _configured: stm32f4xx_hal::serial::Tx<pac::USART2, u8> = tx;
+        // SAFETY: the handler only touches the log queue (under a lock) and USART2.
+        unsafe {
+            cp.NVIC.set_priority(pac::Interrupt::USART2, 0x80);
+            cortex_m::peripheral::NVIC::unmask(pac::Interrupt::USART2);
+        }
+        Log::new(QueuedTx)
+    };
+    #[cfg(not(feature = "board"))]
     let mut log = Log::new(tx);
     let _ = writeln!(
         log,
@@ -176,10 +253,32 @@ fn main() -> ! {
         env!("CARGO_PKG_VERSION"),
         rcc.clocks.sysclk().raw()
     );
-    let _ = writeln!(log, "RESET csr={csr:08x} watchdog={watchdog_reset}");
+    let _ = writeln!(log, "RESET csr={csr:08x} watchdog={}", reset.watchdog);
+    let _ = writeln!(
+        log,
+        "LAYOUT stack={:08x}..{:08x} statics={:08x}..{:08x} reserved={} below_statics={}",
+        layout.stack_limit,
+        layout.stack_top,
+        layout.data_start,
+        layout.bss_end,
+        layout.reserved(),
+        layout.stack_below_statics()
+    );
 
-    let mut wdg = stm32f4xx_hal::watchdog::IndependentWatchdog::new(dp.IWDG);
-    wdg.start(10.millis());
+    // The independent watchdog: fed by the period loop only (`guard::at_tick`).
+    let _ = dp.IWDG;
+    regs::watchdog_start(watchdog::IWDG);
+    let _ = writeln!(
+        log,
+        "IWDG pr={} rlr={} timeout={} us (LSI {}-{} kHz: {}-{} us)",
+        watchdog::IWDG.pr,
+        watchdog::IWDG.rlr,
+        watchdog::IWDG.timeout_us(watchdog::LSI_HZ_TYP),
+        watchdog::LSI_HZ_MIN / 1000,
+        watchdog::LSI_HZ_MAX / 1000,
+        watchdog::IWDG.timeout_us(watchdog::LSI_HZ_MAX),
+        watchdog::IWDG.timeout_us(watchdog::LSI_HZ_MIN),
+    );
 
     #[cfg(feature = "board")]
     let code = board::run(board::Parts {
@@ -204,14 +303,13 @@ fn main() -> ! {
         tim8: dp.TIM8,
         rcc: &mut rcc,
         nvic: &mut cp.NVIC,
-        wdg: &mut wdg,
-        watchdog_reset,
+        reset,
         log: &mut log,
     });
     #[cfg(not(feature = "board"))]
     let code = {
-        let _ = (watchdog_reset, &mut cp);
-        sim::run(&mut rcc, &mut wdg, &mut log)
+        let _ = &mut cp;
+        sim::run(&mut rcc, csr, &mut log)
     };
     let _ = writeln!(log, "DONE {code}");
     #[cfg(not(feature = "board"))]
@@ -294,6 +392,7 @@ fn panic(info: &PanicInfo) -> ! {
     // Outputs off and driver disabled before anything else (formatting could fault).
     regs::force_safe();
     cortex_m::interrupt::disable();
+    flush_log_queue();
     let mut line = LineBuf::new();
     let _ = writeln!(line, "PANIC {}\r", info.message());
     regs::usart_write_raw(line.as_bytes());
@@ -302,9 +401,59 @@ fn panic(info: &PanicInfo) -> ! {
     fault_stop(b"")
 }
 
+/// A static in RAM, set at start, whose value the HardFault handler reports: a stack overflow
+/// that ran into the statics would have overwritten it (with flip-link it faults first).
+pub static CANARY: AtomicU32 = AtomicU32::new(0);
+/// The canary's value.
+pub const CANARY_VALUE: u32 = 0x5AFE_C0DE;
+
+// The HardFault entry, in assembly, instead of cortex-m-rt's trampoline: before any Rust code
+// (which pushes registers) the stack pointer goes back to the top of the stack. After a stack
+// overflow (with flip-link: below the start of RAM) the exception is entered with the stack
+// pointer below RAM, and the handler's first push would fault again inside HardFault: a
+// lockup, with the PWM still running until the watchdog bites. The exception frame is given up
+// (this handler never returns).
+core::arch::global_asm!(
+    ".section .HardFault.user, \"ax\"",
+    ".global HardFault",
+    ".type HardFault,%function",
+    ".thumb_func",
+    "HardFault:",
+    "ldr r0, ={top}",
+    "bic r0, r0, #7",
+    "msr msp, r0",
+    "b {handler}",
+    ".ltorg",
+    ".size HardFault, . - HardFault",
+    top = sym _stack_start,
+    handler = sym hard_fault,
+);
+
+extern "C" {
+    static _stack_start: u32;
+}
+
+/// Any exception or interrupt without a handler of its own (an interrupt enabled by mistake,
+/// an NMI): safe state first, like a HardFault (cortex-m-rt's default would spin with the PWM
+/// running until the watchdog bites).
 #[exception]
-unsafe fn HardFault(_frame: &ExceptionFrame) -> ! {
+unsafe fn DefaultHandler(irqn: i16) {
     regs::force_safe();
+    cortex_m::interrupt::disable();
+    flush_log_queue();
+    let mut line = LineBuf::new();
+    let _ = writeln!(line, "UNEXPECTED irq {irqn}\r");
+    regs::usart_write_raw(line.as_bytes());
+    fault_stop(b"")
+}
+
+/// The HardFault handler proper, on a fresh stack: safe state first.
+extern "C" fn hard_fault() -> ! {
+    regs::force_safe();
+    flush_log_queue();
     regs::usart_write_raw(b"HARDFAULT\r\n");
+    let mut line = LineBuf::new();
+    let _ = writeln!(line, "CANARY {:08x}\r", CANARY.load(Ordering::Relaxed));
+    regs::usart_write_raw(line.as_bytes());
     fault_stop(b"")
 }

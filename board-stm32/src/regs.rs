@@ -11,6 +11,8 @@
 //! | 2 ms control period interrupt | TIM7 (basic timer, 84 MHz) | TIM5 (QEMU's timers count at 1 GHz) |
 //! | encoders x, y, L, alpha, beta | TIM2, TIM3, TIM4, TIM5, TIM8 (encoder mode) | simulated plant |
 
+use crate::debug_freeze;
+use crate::watchdog::IwdgConfig;
 use core::ptr::{read_volatile, write_volatile};
 use crane_twin::logic::io::PWM_MAX;
 use crane_twin::preload::PreloadedTimer;
@@ -35,8 +37,14 @@ pub const USART2: usize = 0x4000_4400;
 pub const DBGMCU_APB1_FZ: usize = 0xE004_2008;
 /// DBGMCU APB2 freeze register.
 pub const DBGMCU_APB2_FZ: usize = 0xE004_200C;
+/// GPIOB (the safety inputs, [`crate::safety_pins`]).
+pub const GPIOB: usize = 0x4002_0400;
 /// GPIOC (driver enable PC8, brake release PC13, direction pins PC0-PC5).
 pub const GPIOC: usize = 0x4002_0800;
+/// Independent watchdog.
+pub const IWDG: usize = 0x4000_3000;
+/// RCC reset and clock control (`RCC_CSR` at +0x74).
+pub const RCC: usize = 0x4002_3800;
 
 // Timer register offsets.
 const CR1: usize = 0x00;
@@ -52,18 +60,28 @@ const ARR: usize = 0x2C;
 const CCR1: usize = 0x34;
 const BDTR: usize = 0x44;
 
+/// The board's PWM timer.
+pub const BOARD_PWM_TIM: usize = TIM1;
+/// The board's period timer.
+pub const BOARD_PERIOD_TIM: usize = TIM7;
+/// The QEMU build's PWM timer (QEMU models TIM2-5 only).
+pub const QEMU_PWM_TIM: usize = TIM3;
+/// The QEMU build's period timer.
+pub const QEMU_PERIOD_TIM: usize = TIM5;
 /// The PWM timer of this build.
 #[cfg(feature = "board")]
-pub const PWM_TIM: usize = TIM1;
+pub const PWM_TIM: usize = BOARD_PWM_TIM;
 /// The PWM timer of this build.
 #[cfg(not(feature = "board"))]
-pub const PWM_TIM: usize = TIM3;
+pub const PWM_TIM: usize = QEMU_PWM_TIM;
 /// The period timer of this build.
 #[cfg(feature = "board")]
-pub const PERIOD_TIM: usize = TIM7;
+pub const PERIOD_TIM: usize = BOARD_PERIOD_TIM;
 /// The period timer of this build.
 #[cfg(not(feature = "board"))]
-pub const PERIOD_TIM: usize = TIM5;
+pub const PERIOD_TIM: usize = QEMU_PERIOD_TIM;
+/// Control period [us].
+pub const PERIOD_US: u32 = 2_000;
 /// Clock of the period timer [Hz]: APB1 timers at 2 x 42 MHz on the board; QEMU's STM32F2xx
 /// timer model counts at a fixed 1 GHz (`clock-frequency` of its SoC), whatever RCC says.
 #[cfg(feature = "board")]
@@ -183,10 +201,76 @@ pub fn encoder_counts() -> [u16; 5] {
 /// timer TIM1 then also disables its outputs (RM0090 32.16: as after a break event), the
 /// period timer stops ticking and the watchdog does not reset a halted core.
 pub fn freeze_timers_in_debug() {
-    // APB1: TIM2..TIM7 (bits 0-5), IWDG (bit 12).
-    wr(DBGMCU_APB1_FZ, rd(DBGMCU_APB1_FZ) | 0x3F | (1 << 12));
-    // APB2: TIM1 (bit 0), TIM8 (bit 1).
-    wr(DBGMCU_APB2_FZ, rd(DBGMCU_APB2_FZ) | 0b11);
+    wr(
+        DBGMCU_APB1_FZ,
+        rd(DBGMCU_APB1_FZ) | debug_freeze::APB1_FREEZE,
+    );
+    wr(
+        DBGMCU_APB2_FZ,
+        rd(DBGMCU_APB2_FZ) | debug_freeze::APB2_FREEZE,
+    );
+}
+
+/// The safety inputs' port: `GPIOB_IDR` (board; decoded by
+/// [`crate::safety_pins::inputs_from_idr`]).
+pub fn safety_port() -> u32 {
+    rd(GPIOB + 0x10)
+}
+
+/// `RCC_CSR` (the reset flags).
+pub fn rcc_csr() -> u32 {
+    rd(RCC + 0x74)
+}
+
+/// Clears the reset flags (`RCC_CSR.RMVF`).
+pub fn clear_reset_flags() {
+    wr(RCC + 0x74, rd(RCC + 0x74) | (1 << 24));
+}
+
+// IWDG registers and keys (RM0090 21.4).
+const IWDG_KR: usize = IWDG;
+const IWDG_PR: usize = IWDG + 0x04;
+const IWDG_RLR: usize = IWDG + 0x08;
+const IWDG_SR: usize = IWDG + 0x0C;
+
+/// Starts the independent watchdog with `cfg` (it cannot be stopped again): start key (which
+/// also starts the LSI), unlock, prescaler and reload, wait (bounded) until both are taken over
+/// in the LSI domain, reload.
+pub fn watchdog_start(cfg: IwdgConfig) {
+    wr(IWDG_KR, 0xCCCC);
+    wr(IWDG_KR, 0x5555);
+    wr(IWDG_PR, u32::from(cfg.pr));
+    wr(IWDG_RLR, u32::from(cfg.rlr));
+    // PVU | RVU clear: a few LSI periods (<= 0.4 ms); bounded in case the LSI never starts
+    // (the counter then never runs either, and the board has no watchdog: logged by `main`).
+    let mut n = 0u32;
+    while rd(IWDG_SR) & 0b11 != 0 && n < 1_000_000 {
+        n += 1;
+    }
+    watchdog_feed();
+}
+
+/// Reloads the independent watchdog's counter.
+pub fn watchdog_feed() {
+    wr(IWDG_KR, 0xAAAA);
+}
+
+/// Sends the next byte on the log USART from its interrupt: `next` is asked for a byte only
+/// when the transmit register is empty; with none left the interrupt is switched off.
+pub fn usart_tx_interrupt(next: impl FnOnce() -> Option<u8>) {
+    if rd(USART2) & (1 << 7) == 0 {
+        return;
+    }
+    match next() {
+        Some(b) => wr(USART2 + 4, u32::from(b)),
+        None => usart_tx_interrupt_enable(false),
+    }
+}
+
+/// Switches the log USART's transmit-empty interrupt (`CR1.TXEIE`) on or off.
+pub fn usart_tx_interrupt_enable(on: bool) {
+    let cr1 = rd(USART2 + 0x0C) & !(1 << 7);
+    wr(USART2 + 0x0C, cr1 | (u32::from(on) << 7));
 }
 
 /// Blocking write of bytes to the log USART from a fault handler (no HAL object). Bounded:

@@ -40,6 +40,7 @@ pub fn pa8_high(n: u32) -> u32 {
 #[defmt_test::tests]
 mod tests {
     use super::{pa8_high, State, PERIOD_CYCLES, SYSCLK};
+    use board_stm32::debug_freeze;
     use board_stm32::regs::{self, PwmTimer};
     use core::cell::RefCell;
     use cortex_m::peripheral::DWT;
@@ -123,6 +124,45 @@ mod tests {
         defmt::assert_eq!(ccr, [0, 0, 0]);
         defmt::assert_eq!(ccer, 0);
         defmt::assert_eq!(pa8_high(4_000), 0);
+    }
+
+    #[test]
+    fn force_safe_drops_the_driver_enable_and_the_brake_release() {
+        // PC8 (driver enable) and PC13 (brake release) as outputs, driven high
+        // SAFETY: volatile accesses to RCC_AHB1ENR (GPIOCEN) and GPIOC's MODER, BSRR, ODR.
+        unsafe {
+            let ahb1enr = 0x4002_3830 as *mut u32;
+            ahb1enr.write_volatile(ahb1enr.read_volatile() | (1 << 2));
+            let moder = regs::GPIOC as *mut u32;
+            let m = moder.read_volatile() & !((0b11 << 16) | (0b11 << 26));
+            moder.write_volatile(m | (0b01 << 16) | (0b01 << 26));
+            ((regs::GPIOC + 0x18) as *mut u32).write_volatile((1 << 8) | (1 << 13));
+        }
+        let odr = || {
+            // SAFETY: a volatile read of GPIOC_ODR.
+            unsafe { ((regs::GPIOC + 0x14) as *const u32).read_volatile() }
+        };
+        defmt::assert_eq!(odr() & ((1 << 8) | (1 << 13)), (1 << 8) | (1 << 13));
+        regs::force_safe();
+        defmt::assert_eq!(
+            odr() & ((1 << 8) | (1 << 13)),
+            0,
+            "enable and brake release low"
+        );
+    }
+
+    #[test]
+    fn a_debugger_halt_freezes_the_timers_and_the_watchdog() {
+        regs::freeze_timers_in_debug();
+        // SAFETY: volatile reads of DBGMCU_APB1_FZ and DBGMCU_APB2_FZ.
+        let (apb1, apb2) = unsafe {
+            (
+                (regs::DBGMCU_APB1_FZ as *const u32).read_volatile(),
+                (regs::DBGMCU_APB2_FZ as *const u32).read_volatile(),
+            )
+        };
+        defmt::assert_eq!(apb1 & debug_freeze::APB1_FREEZE, debug_freeze::APB1_FREEZE);
+        defmt::assert_eq!(apb2 & debug_freeze::APB2_FREEZE, debug_freeze::APB2_FREEZE);
     }
 
     #[test]

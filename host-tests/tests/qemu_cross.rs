@@ -164,6 +164,47 @@ fn firmware_under_qemu_matches_host_bit_for_bit() {
         "every scenario in f64, f32, f32x"
     );
     assert_eq!(a.iter().filter(|l| l.starts_with("LEND ")).count(), 3);
+    // the painted stack's high-water marks, each section within the budget
+    let stack = stack_figures(&fw);
+    assert_eq!(stack.len(), 8, "STACK lines: {stack:?}");
+    for (section, bytes) in stack {
+        assert!(
+            bytes <= FIRMWARE_STACK_BUDGET,
+            "stack of `{section}`: {bytes} bytes, over the budget {FIRMWARE_STACK_BUDGET}"
+        );
+    }
+}
+
+/// Stack budget of every section of the firmware [bytes]: 32 KiB, half the window the firmware
+/// paints (64 KiB: a figure near it would be saturated, not measured) and a quarter of an
+/// STM32F405's 128 KiB of RAM. Measured (`scripts/firmware-costs.sh`, firmware/README.md): at
+/// most 20,520 (the f64 closed loop with its report).
+const FIRMWARE_STACK_BUDGET: usize = 32 * 1024;
+
+/// The `STACK <section> <bytes>` lines of a firmware transcript.
+fn stack_figures(text: &str) -> Vec<(&str, usize)> {
+    text.lines()
+        .filter_map(|l| l.strip_prefix("STACK "))
+        .map(|rest| {
+            let (section, bytes) = rest
+                .split_once(' ')
+                .unwrap_or_else(|| panic!("bad STACK line `{rest}`"));
+            let bytes = bytes
+                .trim()
+                .parse()
+                .unwrap_or_else(|_| panic!("bad STACK figure in `{rest}`"));
+            (section, bytes)
+        })
+        .collect()
+}
+
+#[test]
+fn stack_lines_are_read_with_their_section() {
+    let t = "FIRMWARE x\nSTACK loop_f64 20520\nL 0 1\nSTACK period_f32x 15868\n";
+    assert_eq!(
+        stack_figures(t),
+        vec![("loop_f64", 20_520), ("period_f32x", 15_868)]
+    );
 }
 
 /// The scenarios do exercise the automaton: stick-slip, breakaway, reversals, end stops on

@@ -9,10 +9,12 @@
 //! too. Each run ends through a fault path, selected by the semihosting argument:
 //! a forced panic (default), a HardFault (`hardfault`) or the e-stop input (`estop`); the
 //! firmware reads TIM3's compare registers back (QEMU models TIM2-5; the board's TIM1 is
-//! written the same way) and prints them.
+//! written the same way) and prints them. Further runs drive every safety input, stall the
+//! loop (overrun, watchdog feeds) and overflow the stack (flip-link's layout).
 //!
-//! Run by `scripts/test.sh` after `cargo build -p board-stm32 --target thumbv7em-none-eabihf
-//! --release`; `BOARD_ELF` overrides the ELF's path.
+//! Run by `scripts/test.sh` after `cargo rustc -p board-stm32 --bin board-stm32 --target
+//! thumbv7em-none-eabihf --release -- -C linker=flip-link` ([`BUILD`]); `BOARD_ELF` overrides
+//! the ELF's path.
 
 // crane-twin's `defmt` feature (derives only) does not exist in this crate.
 #![allow(unexpected_cfgs)]
@@ -27,6 +29,15 @@ use std::io::Read;
 use std::path::PathBuf;
 use std::process::{Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
+
+/// Stack budget of the QEMU build's run [bytes]: 24 KiB, half again the high-water mark
+/// measured when it was set (15,452 bytes), and at most a fifth of the stack reserved in the
+/// 128 KiB of RAM (131,040 bytes: everything but the 32 bytes of statics).
+const STACK_BUDGET: usize = 24 * 1024;
+
+/// How to build the ELF these tests run (flip-link as the linker).
+const BUILD: &str = "cargo rustc -p board-stm32 --bin board-stm32 --target thumbv7em-none-eabihf \
+     --release -- -C linker=flip-link";
 
 fn workspace_root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -46,9 +57,9 @@ fn board_elf() -> PathBuf {
         });
     assert!(
         elf.is_file(),
-        "board ELF not found at {}: build it first with \
-         `cargo build -p board-stm32 --target thumbv7em-none-eabihf --release` \
-         (the default features: the QEMU build; or point BOARD_ELF at it)",
+        "board ELF not found at {}: build it first with `{BUILD}` \
+         (the default features: the QEMU build; `cargo install flip-link` if missing; or \
+         point BOARD_ELF at it)",
         elf.display()
     );
     elf
@@ -150,7 +161,12 @@ fn field<'a>(text: &'a str, prefix: &str, key: &str) -> &'a str {
 }
 
 fn ccr(text: &str, prefix: &str) -> [u32; 3] {
-    let v: Vec<u32> = field(text, prefix, "ccr")
+    triple(text, prefix, "ccr")
+}
+
+/// Three comma-separated numbers in `key=` of the first line starting with `prefix`.
+fn triple(text: &str, prefix: &str, key: &str) -> [u32; 3] {
+    let v: Vec<u32> = field(text, prefix, key)
         .split(',')
         .map(|x| x.parse().expect("ccr value"))
         .collect();
@@ -174,7 +190,27 @@ fn stm32_trajectory_matches_host_and_a_forced_panic_zeroes_the_pwm() {
     assert_eq!(field(&fw, "TICKS ", "ticks"), "4000");
     assert_eq!(field(&fw, "TICKS ", "overruns"), "0");
     assert!(fw.contains("SUPERVISOR Run"), "{fw}");
-    // 3. the forced panic: PWM running before, compare registers and outputs 0 after
+    // the loop fed the watchdog once per period, from the period loop
+    assert_eq!(field(&fw, "SUPERVISOR ", "feeds"), "4000");
+    // 3. the painted stack's high-water mark over the whole run (4000 periods, the timer
+    //    interrupt, the formatting of every line) within its budget
+    let used: usize = field(&fw, "STACK ", "used").parse().expect("stack used");
+    let reserved: usize = field(&fw, "STACK ", "reserved").parse().expect("reserved");
+    assert!(
+        used > 1024,
+        "the paint was not overwritten at all: {used} bytes"
+    );
+    // the board's incremental sweep (256 words a period) finds the same mark
+    assert_eq!(field(&fw, "STACK ", "swept"), used.to_string());
+    assert!(
+        used <= STACK_BUDGET,
+        "stack high-water mark {used} bytes over the budget {STACK_BUDGET}"
+    );
+    assert!(
+        STACK_BUDGET * 5 <= reserved,
+        "budget {STACK_BUDGET} not a fifth of the {reserved} bytes reserved"
+    );
+    // 4. the forced panic: PWM running before, compare registers and outputs 0 after
     let before = ccr(&fw, "BEFORE ");
     assert!(
         before.iter().any(|&c| c > 0),
@@ -230,4 +266,175 @@ fn stm32_estop_forces_the_safe_state() {
     assert_eq!(ccr(&fw, "BEFORE "), [0, 0, 0]);
     assert_eq!(field(&fw, "BEFORE ", "ccer"), "0");
     assert!(status.success(), "the e-stop run ends normally:\n{fw}");
+}
+
+/// The `INPUT` line of pin `pin` (e.g. `PB8`).
+fn input_line<'a>(fw: &'a str, pin: &str) -> &'a str {
+    let tag = format!("INPUT {pin} ");
+    fw.lines()
+        .find(|l| l.starts_with(&tag))
+        .unwrap_or_else(|| panic!("no `{tag}` line in:\n{fw}"))
+}
+
+#[test]
+#[ignore = "needs qemu-system-arm and the board ELF; run by scripts/test.sh"]
+fn stm32_every_safety_input_forces_the_safe_state() {
+    // e-stop PB0, driver fault PB1, limits X-/X+ PB8/PB9, Y-/Y+ PB10/PB11, L-/L+ PB12/PB13:
+    // each alone, through the board's pin decoding, supervisor and `force_safe`
+    let (status, fw) = run_board("inputs");
+    assert!(fw.contains("MODE Inputs"), "{fw}");
+    let expect = [
+        ("PB0", "Safe(EStop)".to_string()),
+        ("PB1", "Safe(DriverFault)".to_string()),
+    ]
+    .into_iter()
+    .chain((0..6).map(|k| {
+        (
+            ["PB8", "PB9", "PB10", "PB11", "PB12", "PB13"][k],
+            format!(
+                "Safe(Limit {{ axis: {}, positive: {} }})",
+                k / 2,
+                k % 2 == 1
+            ),
+        )
+    }));
+    for (pin, state) in expect {
+        let line = input_line(&fw, pin);
+        let before = triple(line, "INPUT ", "before");
+        assert!(
+            before.iter().all(|&c| c > 0),
+            "{pin}: PWM not driven before: {line}"
+        );
+        assert!(line.contains(&format!("state={state} ")), "{pin}: {line}");
+        // the loop kept commanding for three periods: nothing reached the PWM
+        assert_eq!(ccr(line, "INPUT "), [0, 0, 0], "{pin}: {line}");
+        assert_eq!(field(line, "INPUT ", "ccer"), "0", "{pin}: {line}");
+        // a safe state with the loop alive keeps the watchdog fed (no reset loop)
+        assert_eq!(field(line, "INPUT ", "fed"), "3", "{pin}: {line}");
+    }
+    // every contact open at once (a cut cable): the e-stop is named
+    let all = input_line(&fw, "all");
+    assert!(all.contains("state=Safe(EStop) "), "{all}");
+    assert_eq!(ccr(all, "INPUT "), [0, 0, 0]);
+    assert!(status.success(), "{fw}");
+}
+
+#[test]
+#[ignore = "needs qemu-system-arm and the board ELF; run by scripts/test.sh"]
+fn stm32_a_stalled_loop_trips_overrun_and_stops_feeding_the_watchdog() {
+    let (status, fw) = run_board("stall");
+    assert!(fw.contains("MODE Stall"), "{fw}");
+    let line = |missed: &str| {
+        fw.lines()
+            .find(|l| l.starts_with(&format!("STALL missed={missed} ")))
+            .unwrap_or_else(|| panic!("no STALL missed={missed} line in:\n{fw}"))
+    };
+    // two periods late: tolerated; the timer interrupt counted both overruns
+    let ok = line("2");
+    assert!(ok.contains("state=Run "), "{ok}");
+    assert_eq!(field(ok, "STALL ", "feeds"), "11", "{ok}");
+    assert_eq!(field(ok, "STALL ", "overruns"), "2", "{ok}");
+    assert!(ccr(ok, "STALL ").iter().all(|&c| c > 0), "{ok}");
+    // three: overrun, safe state, and the watchdog is never fed again (on the board it
+    // resets the chip 6.8-18.8 ms later and the reset latches `WatchdogReset`)
+    let bad = line("3");
+    assert!(bad.contains("state=Safe(Overrun) "), "{bad}");
+    assert_eq!(field(bad, "STALL ", "feeds"), "0", "{bad}");
+    assert_eq!(field(bad, "STALL ", "overruns"), "5", "{bad}");
+    assert_eq!(ccr(bad, "STALL "), [0, 0, 0]);
+    assert_eq!(field(bad, "STALL ", "ccer"), "0");
+    assert!(status.success(), "{fw}");
+}
+
+/// A hexadecimal field of the `LAYOUT` line: `key=lo..hi`.
+fn range(fw: &str, key: &str) -> (u32, u32) {
+    let v = field(fw, "LAYOUT ", key);
+    let (lo, hi) = v.split_once("..").expect("lo..hi");
+    (
+        u32::from_str_radix(lo, 16).expect("hex"),
+        u32::from_str_radix(hi, 16).expect("hex"),
+    )
+}
+
+#[test]
+#[ignore = "needs qemu-system-arm and the board ELF; run by scripts/test.sh"]
+fn stm32_a_stack_overflow_faults_into_the_safe_state_leaving_the_statics_intact() {
+    let (status, fw) = run_board("overflow");
+    assert!(fw.contains("MODE Overflow"), "{fw}");
+    // flip-link's layout: the stack at the bottom of RAM (0x2000_0000), the statics above it
+    let (stack_lo, stack_hi) = range(&fw, "stack");
+    let (data_lo, data_hi) = range(&fw, "statics");
+    assert!(
+        field(&fw, "LAYOUT ", "below_statics") == "true" && stack_hi <= data_lo,
+        "the stack is not below .data/.bss: the ELF was not linked with flip-link; \
+         build it with `{BUILD}`\n{fw}"
+    );
+    assert_eq!(
+        stack_lo, 0x2000_0000,
+        "the stack must end at the start of RAM"
+    );
+    assert_eq!(
+        data_hi, 0x2002_0000,
+        "the statics end at the end of the 128 KiB RAM"
+    );
+    // the runaway recursion: a HardFault (not a lockup, not silent corruption), the safe
+    // state, and the canary static intact (a plain link overwrites it on the way down)
+    assert!(
+        ccr(&fw, "BEFORE ").iter().all(|&c| c > 0),
+        "PWM not driven before"
+    );
+    assert!(fw.contains("OVERFLOW\nHARDFAULT\n"), "{fw}");
+    let canary = fw
+        .lines()
+        .find_map(|l| l.strip_prefix("CANARY "))
+        .expect("CANARY line");
+    assert_eq!(canary, "5afec0de", "a static was overwritten by the stack");
+    assert_eq!(ccr(&fw, "SAFE "), [0, 0, 0]);
+    assert_eq!(field(&fw, "SAFE ", "ccer"), "0");
+    assert!(!status.success());
+}
+
+#[test]
+#[ignore = "needs qemu-system-arm and the board ELF; run by scripts/test.sh"]
+fn stm32_after_a_watchdog_reset_the_board_stays_safe() {
+    // QEMU's RCC reads 0: the firmware adds IWDGRSTF to the reset flags it read
+    let (status, fw) = run_board("wdreset");
+    assert!(fw.contains("MODE WatchdogReset"), "{fw}");
+    let arm = fw
+        .lines()
+        .find(|l| l.starts_with("ARM "))
+        .expect("ARM line");
+    assert!(arm.starts_with("ARM Err(WatchdogReset) "), "{arm}");
+    // the loop ran its 4000 periods (alive, the watchdog fed every period) with nothing
+    // reaching the drives: the trajectory is not the host's driven one
+    assert_eq!(field(&fw, "TICKS ", "periods"), "4000");
+    assert_eq!(field(&fw, "SUPERVISOR ", "feeds"), "4000");
+    assert!(fw.contains("SUPERVISOR Safe(WatchdogReset) "), "{fw}");
+    let host = host_loop();
+    let (a, b) = (loop_lines(&fw), loop_lines(&host));
+    let tag = "L 1000 ";
+    let f = a.iter().find(|l| l.starts_with(tag)).expect("board line");
+    let h = b.iter().find(|l| l.starts_with(tag)).expect("host line");
+    assert_ne!(f, h, "the drives were commanded after a watchdog reset");
+    assert_eq!(ccr(&fw, "BEFORE "), [0, 0, 0]);
+    assert_eq!(field(&fw, "BEFORE ", "ccer"), "0");
+    // and it cannot be re-armed: only a power-cycle clears the latch
+    assert!(fw.contains("REARM Err(WatchdogReset)"), "{fw}");
+    assert!(status.success(), "{fw}");
+}
+
+#[test]
+#[ignore = "needs qemu-system-arm and the board ELF; run by scripts/test.sh"]
+fn stm32_an_unexpected_interrupt_forces_the_safe_state() {
+    let (status, fw) = run_board("irq");
+    assert!(fw.contains("MODE UnexpectedIrq"), "{fw}");
+    assert!(
+        ccr(&fw, "BEFORE ").iter().all(|&c| c > 0),
+        "PWM not driven before"
+    );
+    // USART3 is interrupt 39 (cortex-m-rt's number: negative for core exceptions)
+    assert!(fw.contains("UNEXPECTED irq 39\n"), "{fw}");
+    assert_eq!(ccr(&fw, "SAFE "), [0, 0, 0]);
+    assert_eq!(field(&fw, "SAFE ", "ccer"), "0");
+    assert!(!status.success(), "{fw}");
 }

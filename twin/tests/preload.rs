@@ -154,3 +154,170 @@ fn zero_now_channel_reports_the_timer_scale() {
     assert_eq!(timer.borrow().updates, 1, "zero forces the update");
     assert_eq!(timer.borrow().effective[2], 0);
 }
+
+/// A timer whose update events (every PWM period, 25 us) arrive at any point between the
+/// bridge's register writes and pin changes, and the H-bridge's two direction pins. It
+/// records every time the bridge would drive a non-zero duty in a direction other than the
+/// one that duty was commanded with.
+struct AsyncBridge {
+    preload: u16,
+    /// direction of the command that wrote `preload`
+    preload_dir: Option<bool>,
+    effective: u16,
+    effective_dir: Option<bool>,
+    /// IN1, IN2
+    pins: [bool; 2],
+    /// direction of the command being applied (set by the test)
+    command_dir: Option<bool>,
+    rng: u64,
+    updates: u32,
+    reversals_under_load: u32,
+}
+
+impl AsyncBridge {
+    fn new(seed: u64) -> Self {
+        AsyncBridge {
+            preload: 0,
+            preload_dir: None,
+            effective: 0,
+            effective_dir: None,
+            pins: [false; 2],
+            command_dir: None,
+            rng: seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1,
+            updates: 0,
+            reversals_under_load: 0,
+        }
+    }
+    fn pin_dir(&self) -> Option<bool> {
+        match self.pins {
+            [true, false] => Some(true),
+            [false, true] => Some(false),
+            _ => None,
+        }
+    }
+    fn update_event(&mut self) {
+        self.effective = self.preload;
+        self.effective_dir = self.preload_dir;
+        self.updates += 1;
+        self.audit();
+    }
+    /// An update event with probability 1/2 (xorshift).
+    fn maybe_update(&mut self) {
+        self.rng ^= self.rng << 13;
+        self.rng ^= self.rng >> 7;
+        self.rng ^= self.rng << 17;
+        if self.rng & 1 == 1 {
+            self.update_event();
+        }
+    }
+    /// A non-zero duty in effect must be driven in its own command's direction.
+    fn audit(&mut self) {
+        if self.effective != 0 && self.pin_dir() != self.effective_dir {
+            self.reversals_under_load += 1;
+        }
+    }
+    fn set_pin(&mut self, k: usize, level: bool) {
+        self.pins[k] = level;
+        self.audit();
+        self.maybe_update();
+    }
+}
+
+impl PreloadedTimer for AsyncBridge {
+    fn max_compare(&self) -> u16 {
+        4200
+    }
+    fn set_compare(&mut self, _ch: usize, value: u16) {
+        self.preload = value;
+        self.preload_dir = self.command_dir;
+        self.maybe_update();
+    }
+    fn force_update(&mut self) {
+        self.update_event();
+    }
+}
+
+struct AsyncPin<'a>(&'a RefCell<AsyncBridge>, usize);
+
+impl ErrorType for AsyncPin<'_> {
+    type Error = Infallible;
+}
+impl OutputPin for AsyncPin<'_> {
+    fn set_low(&mut self) -> Result<(), Infallible> {
+        self.0.borrow_mut().set_pin(self.1, false);
+        Ok(())
+    }
+    fn set_high(&mut self) -> Result<(), Infallible> {
+        self.0.borrow_mut().set_pin(self.1, true);
+        Ok(())
+    }
+}
+
+/// A channel of the asynchronous timer that only writes the preload register.
+struct AsyncPlain<'a>(&'a RefCell<AsyncBridge>);
+
+impl embedded_hal::pwm::ErrorType for AsyncPlain<'_> {
+    type Error = Infallible;
+}
+impl SetDutyCycle for AsyncPlain<'_> {
+    fn max_duty_cycle(&self) -> u16 {
+        4200
+    }
+    fn set_duty_cycle(&mut self, duty: u16) -> Result<(), Infallible> {
+        self.0.borrow_mut().set_compare(0, duty);
+        Ok(())
+    }
+}
+
+/// Runs [`COMMANDS`] through an H-bridge on `timer`; returns the reversals commanded.
+fn one_schedule<P: SetDutyCycle>(timer: &RefCell<AsyncBridge>, pwm: P) -> u32 {
+    let mut bridge = HBridge::new(pwm, AsyncPin(timer, 0), AsyncPin(timer, 1));
+    let mut reversals = 0;
+    let mut last = None;
+    for u in COMMANDS {
+        let dir = (u != 0.0).then_some(u > 0.0);
+        if dir.is_some() && last.is_some() && dir != last {
+            reversals += 1;
+        }
+        last = dir.or(last);
+        timer.borrow_mut().command_dir = dir;
+        bridge.set_voltage(u).map_err(|_| ()).expect("no error");
+        // the PWM runs on: several periods before the next command
+        for _ in 0..3 {
+            timer.borrow_mut().update_event();
+        }
+    }
+    reversals
+}
+
+/// 500 schedules of update events, with [`ZeroNowChannel`] or a plain channel; returns
+/// (reversals, update events, non-zero duties in effect against their direction).
+fn run_async(zero_now: bool) -> (u32, u32, u32) {
+    let (mut reversals, mut updates, mut bad) = (0, 0, 0);
+    for seed in 1..=500u64 {
+        let timer = RefCell::new(AsyncBridge::new(seed));
+        reversals += if zero_now {
+            one_schedule(&timer, ZeroNowChannel::new(&timer, 0))
+        } else {
+            one_schedule(&timer, AsyncPlain(&timer))
+        };
+        let t = timer.borrow();
+        updates += t.updates;
+        bad += t.reversals_under_load;
+    }
+    (reversals, updates, bad)
+}
+
+#[test]
+fn a_reversal_never_drives_a_duty_in_the_new_direction_before_the_zero_is_latched() {
+    // update events anywhere between the bridge's writes: the zero is latched (by the channel's
+    // own update event) before a pin moves, and a non-zero duty only takes effect with the
+    // pins of its own command
+    let (reversals, updates, bad) = run_async(true);
+    assert!(reversals >= 500 * 4, "{reversals} reversals");
+    assert!(updates > 500 * 12 * 3, "{updates} update events");
+    assert_eq!(bad, 0);
+    // the same schedules with a channel that only preloads the zero: caught
+    let (_, _, plain_bad) = run_async(false);
+    assert!(plain_bad >= 500, "plain channel: {plain_bad}");
+}

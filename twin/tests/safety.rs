@@ -154,3 +154,57 @@ fn a_watchdog_reset_latches_before_arming() {
     );
     assert_eq!(s.outputs([5.0; 3]), SAFE_OUTPUTS);
 }
+
+#[test]
+fn after_a_watchdog_reset_arming_is_refused_until_power_cycled() {
+    let mut s = Supervisor::new();
+    s.trip(Cause::WatchdogReset);
+    // every input clear, tried again and again: stays safe
+    for _ in 0..3 {
+        assert_eq!(s.arm(&Inputs::default()), Err(Cause::WatchdogReset));
+        assert_eq!(s.state(), State::Safe(Cause::WatchdogReset));
+    }
+    // an active input does not replace the latched cause either
+    let estop = Inputs {
+        estop: true,
+        ..Inputs::default()
+    };
+    assert_eq!(s.arm(&estop), Err(Cause::WatchdogReset));
+    assert_eq!(s.state(), State::Safe(Cause::WatchdogReset));
+    // a power-cycle is a new supervisor: it arms
+    assert_eq!(Supervisor::new().arm(&Inputs::default()), Ok(()));
+}
+
+#[test]
+fn the_loop_feeds_the_watchdog_only_while_it_keeps_its_period() {
+    let mut s = Supervisor::new();
+    // safe at power-on (driving the outputs off): feeds
+    assert!(s.feeds_watchdog());
+    s.arm(&Inputs::default()).expect("clear inputs");
+    for missed in 0..=Supervisor::MAX_MISSED {
+        s.check(&Inputs::default(), missed);
+        assert!(s.feeds_watchdog(), "late by {missed} periods is tolerated");
+    }
+    // an e-stop is a healthy safe state: still fed (no reset loop with floating pins)
+    let mut e = s;
+    e.check(
+        &Inputs {
+            estop: true,
+            ..Inputs::default()
+        },
+        0,
+    );
+    assert_eq!(e.state(), State::Safe(Cause::EStop));
+    assert!(e.feeds_watchdog());
+    // one period too many missed: the loop is not healthy, and never feeds again
+    s.check(&Inputs::default(), Supervisor::MAX_MISSED + 1);
+    assert_eq!(s.state(), State::Safe(Cause::Overrun));
+    for _ in 0..10 {
+        s.check(&Inputs::default(), 0);
+        assert!(!s.feeds_watchdog());
+    }
+    // (a watchdog-reset latch keeps feeding: safe, alive, until power-cycled)
+    let mut w = Supervisor::new();
+    w.trip(Cause::WatchdogReset);
+    assert!(w.feeds_watchdog());
+}

@@ -133,8 +133,13 @@ impl Supervisor {
     }
 
     /// Leaves the safe state if every input is clear; otherwise stays safe and returns the
-    /// active cause (which replaces [`Cause::PowerOn`], never another latched cause).
+    /// active cause (which replaces [`Cause::PowerOn`], never another latched cause). After a
+    /// watchdog reset ([`Cause::WatchdogReset`] latched) it never arms: only a power-cycle
+    /// (a new supervisor) does.
     pub fn arm(&mut self, inputs: &Inputs) -> Result<(), Cause> {
+        if self.state == State::Safe(Cause::WatchdogReset) {
+            return Err(Cause::WatchdogReset);
+        }
         match inputs.active() {
             None => {
                 self.state = State::Run;
@@ -168,6 +173,16 @@ impl Supervisor {
         if self.state == State::Run || self.state == State::Safe(Cause::PowerOn) {
             self.state = State::Safe(cause);
         }
+    }
+
+    /// Whether the period loop may feed the independent watchdog now (once per period, right
+    /// after it took the tick and [`Supervisor::check`]ed it). A loop that lost its period
+    /// ([`Cause::Overrun`] latched) is not healthy: it stops feeding, the watchdog resets the
+    /// chip, and the reset latches [`Cause::WatchdogReset`] (safe until power-cycled). In any
+    /// other state, safe ones included, the loop is alive and keeps its outputs driven off, so
+    /// it feeds (a reset loop would leave the driver pins floating instead).
+    pub fn feeds_watchdog(&self) -> bool {
+        self.state != State::Safe(Cause::Overrun)
     }
 
     /// What to drive for the loop's command `volts` [V] in the current state.
