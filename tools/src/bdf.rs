@@ -134,7 +134,10 @@ pub fn integrate<const N: usize>(
             return;
         }
         let e = f64::EPSILON.sqrt() * xs.max(1e-5) / vs;
-        let xp: Vec<f64> = x.iter().zip(v).map(|(xi, vi)| xi + e * vi).collect();
+        let mut xp = [0.0; N];
+        for ((p, xi), vi) in xp.iter_mut().zip(x).zip(v) {
+            *p = xi + e * vi;
+        }
         let fp = eval(t, &xp);
         for ((yi, a), b) in y.iter_mut().zip(&fp).zip(&fx) {
             *yi = (a - b) / e;
