@@ -2,9 +2,12 @@
 //! setting at each error level where both reach it (as found by `crane study`'s sweep,
 //! BENCHMARKS.md "Work-precision"), and both defaults (hybrid: adaptive rtol 1e-7; tanh:
 //! tanh(1000 v) under DP45 at rtol 1e-6, atol 1e-8, the paper's comparison). RMSEs: `crane
-//! study` (the same runs).
+//! study` (the same runs). The `bdf` entries are the fastest `tanh` settings under the
+//! `diffsol` BDF peer in `crane study` (branch stiff): case 1 levels 1e-3 / 1e-4 / 1e-5,
+//! case 2 levels 1e-3 / 1e-4 and 1e-5.
 
 use crane_tools::adaptive_run::{hybrid_adaptive, tolerances};
+use crane_tools::bdf::tanh_bdf;
 use crane_tools::cases::Case;
 use crane_tools::ode45::Options;
 use crane_tools::reference;
@@ -19,6 +22,7 @@ enum Run {
     Adaptive(f64),
     Dp45(f64, f64),
     Rosenbrock(f64, f64),
+    Bdf(f64, f64),
 }
 
 fn opts(rtol: f64) -> Options {
@@ -44,6 +48,9 @@ fn bench(c: &mut Criterion) {
                 ("tanh1e3_dp45_rtol1e-5", Run::Dp45(1e3, 1e-5)),
                 ("tanh1e4_rosenbrock_rtol1e-3", Run::Rosenbrock(1e4, 1e-3)),
                 ("tanh1e5_rosenbrock_rtol1e-5", Run::Rosenbrock(1e5, 1e-5)),
+                ("tanh1e3_bdf_rtol1e-4", Run::Bdf(1e3, 1e-4)),
+                ("tanh1e5_bdf_rtol1e-5", Run::Bdf(1e5, 1e-5)),
+                ("tanh1e6_bdf_rtol1e-7", Run::Bdf(1e6, 1e-7)),
             ]
         } else {
             vec![
@@ -53,6 +60,8 @@ fn bench(c: &mut Criterion) {
                 ("tanh1e4_rosenbrock_rtol1e-4", Run::Rosenbrock(1e4, 1e-4)),
                 ("tanh1e6_rosenbrock_rtol1e-6", Run::Rosenbrock(1e6, 1e-6)),
                 ("tanh1e6_rosenbrock_rtol1e-7", Run::Rosenbrock(1e6, 1e-7)),
+                ("tanh1e5_bdf_rtol1e-4", Run::Bdf(1e5, 1e-4)),
+                ("tanh1e6_bdf_rtol1e-5", Run::Bdf(1e6, 1e-5)),
             ]
         };
         for (name, run) in runs {
@@ -66,6 +75,7 @@ fn bench(c: &mut Criterion) {
                 Run::Rosenbrock(gm, r) => {
                     b.iter(|| tanh_rosenbrock(&case, gm, &opts(r)).expect("runs"))
                 }
+                Run::Bdf(gm, r) => b.iter(|| tanh_bdf(&case, gm, &opts(r)).expect("runs")),
             });
         }
         g.bench_function("tanh1e3_dp45_default", |b| {

@@ -57,6 +57,14 @@ pub enum Error {
         /// Why.
         failure: String,
     },
+    /// The BDF solver ([`crate::bdf`], `diffsol`) stopped early on a `tanh` model.
+    #[error("BDF, tanh({gamma} v): {failure}")]
+    Bdf {
+        /// The slope factor [s/m].
+        gamma: f64,
+        /// Why.
+        failure: crate::bdf::Failure,
+    },
     /// ode45 stopped early on a `tanh` model.
     #[error("ode45, tanh({gamma} v): {failure}")]
     Ode45 {

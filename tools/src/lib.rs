@@ -9,6 +9,8 @@
 //! - [`smooth`]: the comparison dynamics (`tanh` friction, axes outside a case held exactly)
 //!   and the bare dynamics without friction logic, on the model's own `dynamics::eval`; fixed
 //!   step RK4.
+//! - [`bdf`]: the stiff peer of the `tanh` models, `diffsol`'s variable-order BDF (and
+//!   ESDIRK34) on the same grid and error norm.
 //! - [`ode45`]: Dormand-Prince 5(4) with error control and dense output (MATLAB's `ode45`).
 //! - [`reference`]: fixed-step hybrid runs, the high-accuracy reference and its convergence
 //!   check.
@@ -22,6 +24,7 @@
 #![forbid(unsafe_code)]
 
 pub mod adaptive_run;
+pub mod bdf;
 pub mod cases;
 pub mod error;
 pub mod figures;

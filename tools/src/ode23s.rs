@@ -3,8 +3,8 @@
 //!
 //! Why written here: it is the stiff peer of the `tanh` models in the work-precision study, so
 //! it must run on the same right-hand side, the same error norm and the same output grid as
-//! [`crate::ode45`] and cost nothing to build; a general crate (`diffsol`) brings a linear
-//! algebra stack whose build on two shared cores costs minutes, for a 10x10 system.
+//! [`crate::ode45`] and cost nothing to build. The stronger stiff peer, a variable-order BDF,
+//! comes from a crate (`diffsol`, [`crate::bdf`]); this pair stays as MATLAB's `ode23s`.
 //!
 //! One step from `(t, y)` of length `h`, with `d = 1/(2 + sqrt 2)`, `e32 = 6 + sqrt 2`,
 //! `J = df/dy` and `T = df/dt` by forward differences (recomputed every step: the friction

@@ -7,7 +7,8 @@
 //! - hybrid, adaptive ([`crate::adaptive_run`], Dormand-Prince 5(4) with located events): a
 //!   ladder of tolerances `rtol` 1e-3 .. 1e-10 (`atol = rtol / 100`);
 //! - `tanh(gamma v)`, gamma = 1e2 .. 1e6, under [`crate::ode45`] (Dormand-Prince 5(4)) and
-//!   under [`crate::ode23s`] (Rosenbrock 2(3), stiff), tolerances `rtol` 1e-3 .. 1e-8
+//!   under [`crate::ode23s`] (Rosenbrock 2(3), stiff) and under [`crate::bdf`] (`diffsol`'s
+//!   variable-order BDF, stiff), tolerances `rtol` 1e-3 .. 1e-8
 //!   (`atol = rtol / 100`), loosest first; a series stops after a run longer than
 //!   [`Options::series_cap`] (2 s).
 //!
@@ -15,6 +16,7 @@
 //! and the fastest `tanh` setting (any gamma, per solver) whose error is at most that level.
 
 use crate::adaptive_run::{hybrid_adaptive, tolerances};
+use crate::bdf::tanh_bdf;
 use crate::cases::Case;
 use crate::error::{Error, Result};
 use crate::output::Outputs;
@@ -36,6 +38,8 @@ pub enum Method {
     TanhDp45,
     /// `tanh` model under the Rosenbrock 2(3) stiff solver (setting: rtol).
     TanhRosenbrock,
+    /// `tanh` model under `diffsol`'s variable-order BDF ([`crate::bdf`], setting: rtol).
+    TanhBdf,
 }
 
 impl Method {
@@ -46,6 +50,7 @@ impl Method {
             Method::HybridAdaptive => "hybrid adaptive DP45",
             Method::TanhDp45 => "DP45",
             Method::TanhRosenbrock => "Rosenbrock 2(3)",
+            Method::TanhBdf => "BDF",
         }
     }
 
@@ -195,13 +200,13 @@ pub fn sweep(
     }
     for &g in &TANH_GAMMAS {
         progress(&format!("{}: work-precision, {}", case.name, tanh_name(g)));
-        for method in [Method::TanhRosenbrock, Method::TanhDp45] {
+        for method in [Method::TanhRosenbrock, Method::TanhBdf, Method::TanhDp45] {
             for &rtol in &TANH_RTOLS {
                 let opts = tanh_opts(rtol);
-                let (t, (tr, st)) = if method == Method::TanhDp45 {
-                    timed(o, || tanh_ode45(case, g, &opts))?
-                } else {
-                    timed(o, || tanh_rosenbrock(case, g, &opts))?
+                let (t, (tr, st)) = match method {
+                    Method::TanhDp45 => timed(o, || tanh_ode45(case, g, &opts))?,
+                    Method::TanhBdf => timed(o, || tanh_bdf(case, g, &opts))?,
+                    _ => timed(o, || tanh_rosenbrock(case, g, &opts))?,
                 };
                 pts.push(Point {
                     method,
@@ -231,6 +236,8 @@ pub struct Level {
     pub tanh_dp45: Option<Point>,
     /// Fastest `tanh` point under the Rosenbrock solver reaching it.
     pub tanh_rosenbrock: Option<Point>,
+    /// Fastest `tanh` point under the BDF solver reaching it.
+    pub tanh_bdf: Option<Point>,
     /// `min(tanh times) / hybrid time`, where both reach the level.
     pub speedup: Option<f64>,
 }
@@ -252,7 +259,8 @@ pub fn compare(pts: &[Point]) -> Vec<Level> {
                 pts.iter().filter(|p| p.method == Method::TanhRosenbrock),
                 level,
             );
-            let best_tanh = [&dp, &ro]
+            let bdf = fastest(pts.iter().filter(|p| p.method == Method::TanhBdf), level);
+            let best_tanh = [&dp, &ro, &bdf]
                 .iter()
                 .filter_map(|p| p.as_ref().map(|p| p.time_s))
                 .fold(f64::INFINITY, f64::min);
@@ -265,6 +273,7 @@ pub fn compare(pts: &[Point]) -> Vec<Level> {
                 hybrid,
                 tanh_dp45: dp,
                 tanh_rosenbrock: ro,
+                tanh_bdf: bdf,
                 speedup,
             }
         })
@@ -289,8 +298,8 @@ pub fn table(name: &str, levels: &[Level]) -> String {
         "{name}: fastest setting reaching each error level (RMSE of the compared velocity)\n"
     );
     s.push_str(&format!(
-        "{:>8} | {:>44} | {:>44} | {:>44} | {:>8}\n",
-        "level", "hybrid", "tanh DP45", "tanh Rosenbrock 2(3)", "speed-up"
+        "{:>8} | {:>44} | {:>44} | {:>44} | {:>44} | {:>8}\n",
+        "level", "hybrid", "tanh DP45", "tanh Rosenbrock 2(3)", "tanh BDF", "speed-up"
     ));
     let cell = |p: &Option<Point>| match p {
         Some(p) => format!("{} ({} s)", setting_name(p), crate::study::fmt_g(p.time_s)),
@@ -298,11 +307,12 @@ pub fn table(name: &str, levels: &[Level]) -> String {
     };
     for l in levels {
         s.push_str(&format!(
-            "{:>8.0e} | {:>44} | {:>44} | {:>44} | {:>8}\n",
+            "{:>8.0e} | {:>44} | {:>44} | {:>44} | {:>44} | {:>8}\n",
             l.level,
             cell(&l.hybrid),
             cell(&l.tanh_dp45),
             cell(&l.tanh_rosenbrock),
+            cell(&l.tanh_bdf),
             l.speedup
                 .map(|x| format!("{}x", crate::study::fmt_g(x)))
                 .unwrap_or_else(|| "-".into())
@@ -413,6 +423,13 @@ fn draw(
             format!("{} Rosenbrock 2(3)", tanh_name(g)),
             greens[k % 5],
             line(Method::TanhRosenbrock, Some(g)),
+            false,
+        ));
+        // BDF: oranges, light (gamma 1e2) to dark (1e6).
+        series.push((
+            format!("{} BDF", tanh_name(g)),
+            RGBColor(255, 190 - 35 * k as u8, 60 - 12 * k as u8),
+            line(Method::TanhBdf, Some(g)),
             false,
         ));
     }
