@@ -16,7 +16,7 @@
 //! axis only says that its net force stayed inside the breakaway band, which is what the
 //! simulation scores.
 
-use super::prep::{motions, Prepared, Thresholds};
+use super::prep::{motions, onset, Prepared, Thresholds};
 use crane_model::drive::{DriveParams, Motion, PositionForce};
 use crane_model::extensions::deadband;
 use std::fmt;
@@ -295,13 +295,15 @@ pub fn estimate(
                 // first motion: the run must start at rest
                 if p.v.iter().take(3).all(|v| v.abs() <= th.v_move) {
                     if let Some(&(i, _)) = m.first() {
-                        first_motion[dir.index()].push(sg * net(p, i));
+                        let o = onset(p, i, sg);
+                        first_motion[dir.index()].push(sg * net(p, o));
                     }
                 }
                 // every onset after at least 3 samples at rest
                 for &(i, _) in &m {
                     if i >= 3 && p.v[i - 3..i].iter().all(|v| v.abs() <= th.v_move) {
-                        onsets[dir.index()].push(sg * net(p, i));
+                        let o = onset(p, i, sg);
+                        onsets[dir.index()].push(sg * net(p, o));
                     }
                 }
             }
@@ -633,6 +635,7 @@ fn slip_gaps(
                 if !(rest_before && rest_after) {
                     continue;
                 }
+                let a = onset(p, a, sg).max(1);
                 let (lo, hi) = (a - 1, (b + 1).min(n - 1));
                 let dx_total = x[hi] - x[lo];
                 if sg * dx_total <= 0.0 {

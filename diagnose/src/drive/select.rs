@@ -44,7 +44,11 @@ pub fn diagnose_drive(
     info: &DriveInfo,
     opts: &DiagnoseOptions,
 ) -> Result<Report, DiagnoseError> {
-    let prepared: Vec<Prepared> = runs.into_iter().map(Prepared::new).collect();
+    let w = super::prep::window(&runs);
+    let prepared: Vec<Prepared> = runs
+        .into_iter()
+        .map(|r| Prepared::with_window(r, w))
+        .collect();
     let fit: Vec<&Prepared> = prepared.iter().filter(|p| !p.run.held_out).collect();
     let held: Vec<&Prepared> = prepared.iter().filter(|p| p.run.held_out).collect();
     if fit.is_empty() || held.is_empty() {
@@ -270,6 +274,12 @@ pub fn diagnose_drive(
             .collect(),
     };
     let mut flags: Vec<String> = info.load_notes.clone();
+    flags.push(format!(
+        "velocity and acceleration from local quadratic fits over {} samples ({:.4} s): the shortest window whose acceleration noise is below {:.0} % of the motion's",
+        2 * w + 1,
+        (2 * w + 1) as f64 * fit.iter().map(|p| p.run.dt).fold(f64::INFINITY, f64::min),
+        100.0 * super::prep::ACCEL_NOISE_FRACTION
+    ));
     flags.extend(final_.est.flags.iter().map(Flag::to_string));
     flags.extend(notes.into_values());
     let final_model = final_model(&final_.est, info, &flags);
