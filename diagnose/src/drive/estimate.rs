@@ -177,6 +177,8 @@ pub struct Estimate {
     pub slip_gaps: [Vec<f64>; 2],
     /// Sliding samples used.
     pub rows: usize,
+    /// Where the dry-friction level of a structure without stiction came from.
+    pub level: DryLevel,
 }
 
 /// Why a structure cannot be fitted.
@@ -221,13 +223,27 @@ pub fn applied_input(u: &[f64], i: usize, s: &Structure) -> f64 {
     deadband(u.get(j).copied().unwrap_or(0.0), s.deadband)
 }
 
-/// Fits a structure on the fitting runs.
+/// Where a structure without stiction takes its one dry-friction level from (per direction).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DryLevel {
+    /// The net force where the axis leaves rest at the start of each fitting run (median):
+    /// right for short stick-slip motions, where few samples slide.
+    FirstMotion,
+    /// The sliding least squares: right for long slides, where the few run starts give a
+    /// noisy median.
+    Sliding,
+}
+
+/// Fits a structure on the fitting runs; `level` matters only without stiction (with it, the
+/// breakaway is always measured at first motion and the kinetic level by the energy balance).
 pub fn estimate(
     fit: &[&Prepared],
     th: &Thresholds,
     motion: Motion,
     center: f64,
     s: Structure,
+    level: DryLevel,
 ) -> Result<Estimate, EstimateError> {
     // --- 1. sliding least squares -------------------------------------------------------
     let mut rows: Vec<(f64, f64, f64, f64, f64)> = Vec::new(); // (F, a, shape, v, x)
@@ -340,6 +356,9 @@ pub fn estimate(
             ls.offset,
             ls.visc,
         );
+        if !s.stiction && level == DryLevel::Sliding {
+            brk = kinetic_ls;
+        }
         let mut fixed = brk;
         for dir in Dir::BOTH {
             let d = dir.index();
@@ -413,6 +432,7 @@ pub fn estimate(
         kinetic_ls,
         slip_gaps: gaps,
         rows: rows.len(),
+        level,
     })
 }
 
