@@ -41,7 +41,8 @@ enum Expect {
     Report,
     /// A clear error whose text contains this.
     Error(&'static str),
-    /// A report or an error whose text contains this.
+    /// A report naming no cause (`none` or `unexplained`), or an error whose text contains
+    /// this.
     ReportOrError(&'static str),
 }
 
@@ -171,16 +172,18 @@ fn record(rig: &Rig, rng: &mut Rng) -> Vec<Recorded> {
         let n = input.len();
         let t: Vec<f64> = (0..n)
             .map(|i| {
-                let j = if i == 0 { 0.0 } else { rig.jitter * rng.range(-1.0, 1.0) };
+                let j = if i == 0 {
+                    0.0
+                } else {
+                    rig.jitter * rng.range(-1.0, 1.0)
+                };
                 1000.0 * k as f64 + (i as f64 + j) * rig.dt
             })
             .collect();
         let (xs, u, r) = match rig.pd {
             None => {
                 // the drive sees the input `delay` samples late
-                let seen: Vec<f64> = (0..n)
-                    .map(|i| input[i.saturating_sub(rig.delay)])
-                    .collect();
+                let seen: Vec<f64> = (0..n).map(|i| input[i.saturating_sub(rig.delay)]).collect();
                 let xs = simulate_drive(&rig.truth, x0, rig.dt, &seen)
                     .unwrap_or_else(|e| panic!("{}: truth simulation: {e}", rig.name));
                 (xs, input.clone(), None)
@@ -239,7 +242,11 @@ fn write_dataset(rig: &Rig, dir: &Path, runs: &[Recorded]) {
         let file = format!("run{k}.csv");
         writeln!(toml, "\n[[runs]]\nfile = \"{file}\"\nkind = \"other\"").unwrap();
         let mut csv = String::from("# synthesised by diagnose/tests/strangers.rs\n");
-        csv.push_str(if run.r.is_some() { "t,x,u,ref\n" } else { "t,x,u\n" });
+        csv.push_str(if run.r.is_some() {
+            "t,x,u,ref\n"
+        } else {
+            "t,x,u\n"
+        });
         for i in 0..run.t.len() {
             write!(csv, "{},{},{}", run.t[i], run.x[i], run.u[i]).unwrap();
             if let Some(r) = &run.r {
@@ -520,11 +527,17 @@ fn judge(rig: &Rig, r: &Report) -> Vec<String> {
     }
     for c in rig.must {
         if !found.contains(c) {
-            bad.push(format!("large effect {c} not found (verdict {})", r.verdict));
+            bad.push(format!(
+                "large effect {c} not found (verdict {})",
+                r.verdict
+            ));
         }
     }
     if rig.effects.is_empty() && matches!(r.verdict, Verdict::Found(_)) {
-        bad.push(format!("verdict {} on a rig with nothing hidden", r.verdict));
+        bad.push(format!(
+            "verdict {} on a rig with nothing hidden",
+            r.verdict
+        ));
     }
     if let Some(h) = &r.heldout_simulation {
         if !(h.nmae_after <= h.nmae_before * 1.0001 + 1e-9) {
@@ -533,6 +546,25 @@ fn judge(rig: &Rig, r: &Report) -> Vec<String> {
                 h.nmae_after, h.nmae_before
             ));
         }
+    }
+    // an honest "not identifiable" names nothing and is judged no further; on a rig built to
+    // be identifiable it is a failure
+    if r.verdict_reason.contains("not identifiable") {
+        if !found.is_empty() {
+            bad.push("causes named although the baseline is not identifiable".into());
+        }
+        if rig.expect == Expect::Report {
+            bad.push(format!("not identifiable: {}", r.verdict_reason));
+        }
+        return bad;
+    }
+    if let Expect::ReportOrError(_) = rig.expect {
+        // too little data: the honest report names nothing (an invented cause is reported
+        // above) and its parameters are not judged
+        if !matches!(r.verdict, Verdict::Unexplained | Verdict::None) {
+            bad.push(format!("verdict {} on too little data", r.verdict));
+        }
+        return bad;
     }
     // the final model: signs and plausible ranges against the truth, in the report's units
     if let Some(m) = &r.final_model {
@@ -549,7 +581,9 @@ fn judge(rig: &Rig, r: &Report) -> Vec<String> {
                 m.inertia, rig.inertia_tol
             ));
         }
-        let fmax = (t.breakaway_pos.max(t.breakaway_neg) + t.offset.abs()) / g;
+        // a dead band below breakaway acts as dry friction while input and motion agree
+        let fmax =
+            (t.breakaway_pos.max(t.breakaway_neg) + t.offset.abs()) / g + t.gain / g * t.deadband;
         for (name, val) in [
             ("kinetic_pos", m.kinetic_pos),
             ("kinetic_neg", m.kinetic_neg),
@@ -564,7 +598,10 @@ fn judge(rig: &Rig, r: &Report) -> Vec<String> {
             bad.push("breakaway below kinetic".into());
         }
         let vmax = t.viscous_pos.max(t.viscous_neg) / g;
-        for (name, val) in [("viscous_pos", m.viscous_pos), ("viscous_neg", m.viscous_neg)] {
+        for (name, val) in [
+            ("viscous_pos", m.viscous_pos),
+            ("viscous_neg", m.viscous_neg),
+        ] {
             if !(val >= 0.0 && val <= 3.0 * vmax + 1e-12) {
                 bad.push(format!("{name} {val:.4e} outside [0, {:.4e}]", 3.0 * vmax));
             }
@@ -587,15 +624,16 @@ fn judge(rig: &Rig, r: &Report) -> Vec<String> {
             }
         }
         // a large direction asymmetry of the truth is in the final model, on the right side
-        let (tp, tn) = (
-            t.kinetic_pos + t.viscous_pos,
-            t.kinetic_neg + t.viscous_neg,
-        );
+        let (tp, tn) = (t.kinetic_pos + t.viscous_pos, t.kinetic_neg + t.viscous_neg);
         if tn > 1.5 * tp && m.kinetic_neg + m.viscous_neg <= m.kinetic_pos + m.viscous_pos {
-            bad.push("the truth's stronger negative-direction friction is not in the final model".into());
+            bad.push(
+                "the truth's stronger negative-direction friction is not in the final model".into(),
+            );
         }
         if tp > 1.5 * tn && m.kinetic_pos + m.viscous_pos <= m.kinetic_neg + m.viscous_neg {
-            bad.push("the truth's stronger positive-direction friction is not in the final model".into());
+            bad.push(
+                "the truth's stronger positive-direction friction is not in the final model".into(),
+            );
         }
     }
     bad
@@ -604,10 +642,20 @@ fn judge(rig: &Rig, r: &Report) -> Vec<String> {
 fn summary(r: &Report) -> String {
     let mut s = format!("verdict {}; found {:?}", r.verdict, causes(r));
     for f in &r.findings {
-        write!(s, " [{} {:.2}->{:.2}]", f.cause, f.nmae_before, f.nmae_after).unwrap();
+        write!(
+            s,
+            " [{} {:.2}->{:.2} {:?}]",
+            f.cause, f.nmae_before, f.nmae_after, f.parameters
+        )
+        .unwrap();
     }
     if let Some(h) = &r.heldout_simulation {
-        write!(s, "; held-out NMAE {:.2} -> {:.2} %", h.nmae_before, h.nmae_after).unwrap();
+        write!(
+            s,
+            "; held-out NMAE {:.2} -> {:.2} %",
+            h.nmae_before, h.nmae_after
+        )
+        .unwrap();
     }
     if let Some(m) = &r.final_model {
         write!(
@@ -626,7 +674,12 @@ fn summary(r: &Report) -> String {
             m.delay_samples
         )
         .unwrap();
-        write!(s, "; fm {:.3?}/{:.3?}", m.first_motion_pos, m.first_motion_neg).unwrap();
+        write!(
+            s,
+            "; fm {:.3?}/{:.3?}",
+            m.first_motion_pos, m.first_motion_neg
+        )
+        .unwrap();
         if let Some(f) = m.flags.iter().find(|f| f.starts_with("velocity and acc")) {
             write!(s, "; {}", &f[..f.find(':').unwrap_or(f.len())]).unwrap();
         }

@@ -143,6 +143,15 @@ pub fn diagnose_drive(
     let mut findings = Vec::new();
     let mut candidates = Vec::new();
     let mut notes: BTreeMap<Cause, String> = BTreeMap::new();
+    // a model whose inertia the sliding samples do not determine (too short a run, too few
+    // slides, or a missing position force) cannot carry a cause: the extension would only
+    // trade against its guesses; a cause is named only with the inertia determined
+    let at_floor = |est: &Estimate| {
+        est.flags
+            .iter()
+            .any(|f| matches!(f, Flag::InertiaAtFloor { .. }))
+    };
+    let inertia_unknown = at_floor(&baseline.est);
     for _round in 0..DRIVE_CAUSES.len() {
         // a model that already simulates the held-out runs within NONE_LEVEL is right: what
         // is left is estimation error, which any extra parameter (a delay, a dead band, a
@@ -164,7 +173,16 @@ pub fn diagnose_drive(
             let Some((scored, edge)) = try_cause(cause, &current, &fit_and_score, umax) else {
                 continue;
             };
-            let (ok, why) = physical(cause, &scored.est, &current.est);
+            let (ok, why) = if at_floor(&scored.est) {
+                (
+                    false,
+                    Some(format!(
+                        "{cause}: with it the inertia is still not determined by the sliding samples (at its floor)"
+                    )),
+                )
+            } else {
+                physical(cause, &scored.est, &current.est)
+            };
             let gain = 1.0 - scored.selection / current.selection;
             let supported = ok && gain >= MIN_GAIN;
             candidates.push(Candidate {
@@ -241,6 +259,14 @@ pub fn diagnose_drive(
             ));
         }
         (Verdict::Found(f.cause), r)
+    } else if inertia_unknown && at_floor(&final_.est) {
+        (
+            Verdict::Unexplained,
+            format!(
+                "not identifiable: the fitting runs do not determine the inertia (it sits at its floor), so no cause is named; the baseline's held-out simulated position NMAE is {:.2} % (predicting no motion: {:.2} %); longer runs with several accelerations in each direction are needed",
+                baseline.selection, sel_no_motion
+            ),
+        )
     } else if baseline.selection <= NONE_LEVEL {
         (
             Verdict::None,
