@@ -488,6 +488,24 @@ fn rigs() -> Vec<Rig> {
         r.effects = &[Cause::DirectionAsymmetry];
         v.push(r);
     }
+    // 13. a belt drive behind an amplifier with a wide dead band (a third of the inputs)
+    {
+        let dt = 1e-3;
+        let mut truth = lin(0.8, [1.0; 2], [1.0; 2], [6.0; 2]);
+        truth.gain = 4.0;
+        truth.deadband = 1.0;
+        let runs = (0..4)
+            .map(|_| ramps(dt, &[3.0, -3.0, 2.5, -2.5], 6.0, 0.3))
+            .collect();
+        let mut r = base("belt_wide_deadband_V_1kHz", truth, dt, runs);
+        r.input_unit = "V";
+        r.declare_gain = true;
+        r.quantum = 1e-6;
+        // under ramps a dead band and a higher dry level simulate alike (they differ only
+        // while the input is inside the band and the axis still coasts): allowed, not required
+        r.effects = &[Cause::InputDeadzone];
+        v.push(r);
+    }
     // 12. a closed PD position loop around a linear axis, declared as `[controller]`
     {
         let dt = 1e-3;
@@ -545,6 +563,33 @@ fn judge(rig: &Rig, r: &Report) -> Vec<String> {
                 "final model worse than the baseline on held-out runs: {:.3} % > {:.3} %",
                 h.nmae_after, h.nmae_before
             ));
+        }
+    }
+    // the named parameters against the truth
+    for f in &r.findings {
+        let p = |k: &str| f.parameters.get(k).copied().unwrap_or(f64::NAN);
+        match f.cause {
+            Cause::InputDelay if rig.delay > 0 => {
+                if (p("delay_samples") - rig.delay as f64).abs() > 1.0 {
+                    bad.push(format!(
+                        "delay {} samples, truth {}",
+                        p("delay_samples"),
+                        rig.delay
+                    ));
+                }
+            }
+            Cause::ForceOffset if rig.truth.offset != 0.0 => {
+                if p("offset") * rig.truth.offset <= 0.0 {
+                    bad.push(format!("offset {} of the wrong sign", p("offset")));
+                }
+            }
+            Cause::InputDeadzone if rig.truth.deadband > 0.0 => {
+                let d = p("deadband") / rig.truth.gain; // the runs' input is the force
+                if !(d > 0.5 * rig.truth.deadband && d < 2.0 * rig.truth.deadband) {
+                    bad.push(format!("dead band {d} V, truth {}", rig.truth.deadband));
+                }
+            }
+            _ => {}
         }
     }
     // an honest "not identifiable" names nothing and is judged no further; on a rig built to
@@ -756,6 +801,7 @@ fn the_truth_reproduces_its_recording_through_the_loader() {
         };
         let mut p = rig.truth;
         p.gain = rig.truth.gain / g;
+        p.deadband = rig.truth.deadband * g; // in the units of the loaded input
         for run in &ds.runs {
             let a = run.axis().expect("single-axis");
             let seen: Vec<f64> = (0..a.force.len())

@@ -61,13 +61,15 @@ pub const ACCEL_NOISE_FRACTION: f64 = 0.1;
 /// 2.5 ms and one encoder count becomes an acceleration spike far above the motion's, which
 /// biases the inertia towards 0 (noise in a regressor); at 67 Hz (CICESE) the same five
 /// samples are right. The position noise is the larger of the encoder step's (`q / sqrt 12`)
-/// and a robust scale of the second differences (`median |dd x| / (0.6745 sqrt 6)`).
+/// and a robust scale of the third differences (`median |d3 x| / (0.6745 sqrt 20)`, rests
+/// included; third differences of a smooth motion are `x''' dt^3`, far below the noise's
+/// except at the lowest rates, where the window stays short anyway).
 pub fn window(runs: &[DriveRun]) -> usize {
     let mut dd: Vec<f64> = Vec::new();
     let mut quantum = f64::INFINITY;
     for r in runs {
-        for k in 1..r.x.len().saturating_sub(1) {
-            dd.push((r.x[k + 1] - 2.0 * r.x[k] + r.x[k - 1]).abs());
+        for k in 1..r.x.len().saturating_sub(2) {
+            dd.push((r.x[k + 2] - 3.0 * r.x[k + 1] + 3.0 * r.x[k] - r.x[k - 1]).abs());
         }
         for w in r.x.windows(2) {
             let d = (w[1] - w[0]).abs();
@@ -76,7 +78,7 @@ pub fn window(runs: &[DriveRun]) -> usize {
             }
         }
     }
-    dd.retain(|d| *d > 0.0);
+    dd.retain(|d| d.is_finite());
     let mut sigma = if quantum.is_finite() {
         quantum / 12f64.sqrt()
     } else {
@@ -84,7 +86,7 @@ pub fn window(runs: &[DriveRun]) -> usize {
     };
     if !dd.is_empty() {
         dd.sort_by(f64::total_cmp);
-        sigma = sigma.max(dd[dd.len() / 2] / (0.6745 * 6f64.sqrt()));
+        sigma = sigma.max(dd[dd.len() / 2] / (0.6745 * 20f64.sqrt()));
     }
     if sigma.is_nan() || sigma <= 0.0 {
         return W;
@@ -345,6 +347,75 @@ mod tests {
             let (v, a) = derivatives(&x, 0.01);
             assert_eq!(v.len(), n);
             assert!(v.iter().chain(&a).all(|q| q.is_finite()));
+        }
+    }
+
+    fn run(dt: f64, x: Vec<f64>) -> DriveRun {
+        DriveRun {
+            name: "r".into(),
+            held_out: false,
+            dt,
+            u: vec![0.0; x.len()],
+            x,
+        }
+    }
+
+    /// A smooth swing of 0.1 m at 1 Hz, sampled at `hz` and quantised to `q`.
+    fn swing(hz: f64, q: f64) -> DriveRun {
+        let dt = 1.0 / hz;
+        let n = (4.0 * hz) as usize;
+        let x = (0..n)
+            .map(|k| {
+                let y = 0.1 * (std::f64::consts::TAU * k as f64 * dt).sin();
+                if q > 0.0 {
+                    (y / q).round() * q
+                } else {
+                    y
+                }
+            })
+            .collect();
+        run(dt, x)
+    }
+
+    #[test]
+    fn the_window_grows_with_the_rate_and_the_encoder_step_not_otherwise() {
+        // 67 Hz with a fine encoder: the five samples of the CICESE logs
+        assert_eq!(window(&[swing(67.0, 1e-7)]), W);
+        // 2 kHz with a 10 um encoder: five samples would see one count as 40 m/s^2 against
+        // the swing's 4 m/s^2
+        let w = window(&[swing(2000.0, 1e-5)]);
+        assert!(w > 4 * W, "half window {w}");
+        let (_, a) = derivatives_over(&swing(2000.0, 1e-5).x, 5e-4, w);
+        let peak = a.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+        let want = 0.1 * std::f64::consts::TAU.powi(2);
+        assert!((peak - want).abs() < 0.25 * want, "peak {peak} vs {want}");
+    }
+
+    #[test]
+    fn the_onset_of_a_motion_under_a_steep_ramp_is_found_where_it_starts() {
+        // at rest until sample 200, then x = c (k - 200)^3: the acceleration grows linearly
+        // from 0, as under a force ramp from the breakaway level
+        let dt = 1e-3;
+        let x: Vec<f64> = (0..400)
+            .map(|k| {
+                if k < 200 {
+                    0.0
+                } else {
+                    1e-6 * ((k - 200) as f64).powi(3)
+                }
+            })
+            .collect();
+        for w in [W, 6] {
+            let p = Prepared::with_window(run(dt, x.clone()), w);
+            let v_peak = p.v.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let m = motions(&p.v, MOVE_FRACTION * v_peak, 1.0);
+            let i = m[0].0;
+            let o = onset(&p, i, 1.0);
+            assert!(i > 215, "the threshold is crossed late: {i}");
+            assert!(
+                (198..=206).contains(&o),
+                "w {w}: onset {o} (threshold at {i})"
+            );
         }
     }
 }
