@@ -19,6 +19,9 @@
 //!
 //! `cargo test -p crane-diagnose --test strangers -- --nocapture` prints one line per rig.
 
+// `!(x <= limit)` on purpose: a NaN must fail the check, not pass it
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use crane_diagnose::{diagnose, Cause, DiagnoseError, DiagnoseOptions, Report, Verdict};
 use crane_ident::rng::Rng;
 use crane_ident::simulate::{simulate_drive, substeps};
@@ -568,26 +571,31 @@ fn judge(rig: &Rig, r: &Report) -> Vec<String> {
     // the named parameters against the truth
     for f in &r.findings {
         let p = |k: &str| f.parameters.get(k).copied().unwrap_or(f64::NAN);
+        let fitted_deadband_v = p("deadband") / rig.truth.gain; // the runs' input is the force
         match f.cause {
-            Cause::InputDelay if rig.delay > 0 => {
-                if (p("delay_samples") - rig.delay as f64).abs() > 1.0 {
-                    bad.push(format!(
-                        "delay {} samples, truth {}",
-                        p("delay_samples"),
-                        rig.delay
-                    ));
-                }
+            Cause::InputDelay
+                if rig.delay > 0 && (p("delay_samples") - rig.delay as f64).abs() > 1.0 =>
+            {
+                bad.push(format!(
+                    "delay {} samples, truth {}",
+                    p("delay_samples"),
+                    rig.delay
+                ));
             }
-            Cause::ForceOffset if rig.truth.offset != 0.0 => {
-                if p("offset") * rig.truth.offset <= 0.0 {
-                    bad.push(format!("offset {} of the wrong sign", p("offset")));
-                }
+            Cause::ForceOffset
+                if rig.truth.offset != 0.0 && p("offset") * rig.truth.offset <= 0.0 =>
+            {
+                bad.push(format!("offset {} of the wrong sign", p("offset")));
             }
-            Cause::InputDeadzone if rig.truth.deadband > 0.0 => {
-                let d = p("deadband") / rig.truth.gain; // the runs' input is the force
-                if !(d > 0.5 * rig.truth.deadband && d < 2.0 * rig.truth.deadband) {
-                    bad.push(format!("dead band {d} V, truth {}", rig.truth.deadband));
-                }
+            Cause::InputDeadzone
+                if rig.truth.deadband > 0.0
+                    && !(fitted_deadband_v > 0.5 * rig.truth.deadband
+                        && fitted_deadband_v < 2.0 * rig.truth.deadband) =>
+            {
+                bad.push(format!(
+                    "dead band {fitted_deadband_v} V, truth {}",
+                    rig.truth.deadband
+                ));
             }
             _ => {}
         }
@@ -660,13 +668,14 @@ fn judge(rig: &Rig, r: &Report) -> Vec<String> {
                 stiffness / g
             }
         };
-        if k_true > 0.0 && found.contains(&Cause::RestoringForce) {
-            if !(m.stiffness > 0.5 * k_true && m.stiffness < 2.0 * k_true) {
-                bad.push(format!(
-                    "stiffness {:.4} not within x2 of the truth {k_true:.4}",
-                    m.stiffness
-                ));
-            }
+        if k_true > 0.0
+            && found.contains(&Cause::RestoringForce)
+            && !(m.stiffness > 0.5 * k_true && m.stiffness < 2.0 * k_true)
+        {
+            bad.push(format!(
+                "stiffness {:.4} not within x2 of the truth {k_true:.4}",
+                m.stiffness
+            ));
         }
         // a large direction asymmetry of the truth is in the final model, on the right side
         let (tp, tn) = (t.kinetic_pos + t.viscous_pos, t.kinetic_neg + t.viscous_neg);

@@ -104,7 +104,7 @@ pub fn window(runs: &[DriveRun]) -> usize {
             .sum();
         let (mut ss, mut n, mut noise) = (0.0, 0usize, 0.0);
         for r in runs {
-            if !(r.dt > 0.0) {
+            if r.dt.is_nan() || r.dt <= 0.0 {
                 continue;
             }
             noise += 2.0 * sigma / (s.sqrt() * r.dt * r.dt);
