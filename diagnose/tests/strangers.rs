@@ -79,6 +79,8 @@ struct Rig {
     expect: Expect,
     /// Largest acceptable ratio of a fitted inertia to the truth (and its inverse).
     inertia_tol: f64,
+    /// The encoder counts the other way: the recorded position is the negated truth.
+    reversed: bool,
 }
 
 // ---- input profiles ------------------------------------------------------------------------
@@ -213,7 +215,8 @@ fn record(rig: &Rig, rng: &mut Rng) -> Vec<Recorded> {
             }
         };
         x0 = *xs.last().unwrap_or(&x0);
-        let x = xs.iter().map(|&x| measure(rig, rng, x)).collect();
+        let sign = if rig.reversed { -1.0 } else { 1.0 };
+        let x = xs.iter().map(|&x| sign * measure(rig, rng, x)).collect();
         out.push(Recorded { t, x, u, r });
     }
     out
@@ -286,7 +289,12 @@ fn rot(inertia: f64, kin: [f64; 2], brk: [f64; 2], visc: [f64; 2]) -> DriveParam
 }
 
 fn rigs() -> Vec<Rig> {
-    let mut rng = Rng::new(0x5742_4e47);
+    // `STRANGERS_SEED=n` draws other inputs (a robustness check by hand; CI uses the default)
+    let seed = std::env::var("STRANGERS_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0x5742_4e47);
+    let mut rng = Rng::new(seed);
     let mut v = Vec::new();
     let base = |name, truth, dt, runs| Rig {
         name,
@@ -305,6 +313,7 @@ fn rigs() -> Vec<Rig> {
         must: &[],
         expect: Expect::Report,
         inertia_tol: 2.0,
+        reversed: false,
     };
     // 1. a clean linear carriage, force input, symmetric Coulomb + viscous: nothing hidden
     {
@@ -509,6 +518,25 @@ fn rigs() -> Vec<Rig> {
         r.effects = &[Cause::InputDeadzone];
         v.push(r);
     }
+    // 14. the encoder counts against the drive: a positive input moves the recorded position
+    //     negative (a motor or an encoder wired the other way round)
+    {
+        let dt = 2e-3;
+        let runs = (0..4)
+            .map(|_| pulses(&mut rng, dt, 4, 2.0, 5.0, 0.5, 0.3, 0.0, false))
+            .collect();
+        let mut r = base(
+            "reversed_encoder_Nm_500Hz",
+            rot(0.05, [0.5; 2], [0.5; 2], [0.2; 2]),
+            dt,
+            runs,
+        );
+        r.input_unit = "N m";
+        r.quantum = 1e-4;
+        r.reversed = true;
+        r.expect = Expect::Error("sign");
+        v.push(r);
+    }
     // 12. a closed PD position loop around a linear axis, declared as `[controller]`
     {
         let dt = 1e-3;
@@ -528,6 +556,13 @@ fn rigs() -> Vec<Rig> {
 }
 
 // ---- judging ---------------------------------------------------------------------------------
+
+fn seed_offset() -> u64 {
+    std::env::var("STRANGERS_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0)
+}
 
 fn dir_for(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("crane_strangers_{}_{name}", std::process::id()))
@@ -745,7 +780,7 @@ fn summary(r: &Report) -> String {
 fn strangers_rigs_are_diagnosed_honestly() {
     let mut failures = Vec::new();
     for rig in rigs() {
-        let mut rng = Rng::new(rig.name.len() as u64 * 7919 + 17);
+        let mut rng = Rng::new(rig.name.len() as u64 * 7919 + 17 + seed_offset());
         let runs = record(&rig, &mut rng);
         let dir = dir_for(rig.name);
         write_dataset(&rig, &dir, &runs);
@@ -795,7 +830,7 @@ fn strangers_rigs_are_diagnosed_honestly() {
 #[test]
 fn the_truth_reproduces_its_recording_through_the_loader() {
     for rig in rigs() {
-        if rig.pd.is_some() || rig.jitter > 0.0 {
+        if rig.pd.is_some() || rig.jitter > 0.0 || rig.reversed {
             continue;
         }
         let mut rng = Rng::new(rig.name.len() as u64 * 7919 + 17);

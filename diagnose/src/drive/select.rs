@@ -76,6 +76,7 @@ pub fn diagnose_drive(
     // homed at its equilibrium; the centre is not separable from a force offset otherwise).
     let center =
         prepared.iter().filter_map(|p| p.run.x.first()).sum::<f64>() / prepared.len() as f64;
+    reversed_sign(&fit, &th, info.motion, center)?;
     // Held-out runs in which the axis never leaves rest (beyond pre-sliding) cannot tell
     // friction models apart (every model that sticks predicts them equally): the selection
     // scores the runs that move, and the report shows every run.
@@ -382,6 +383,45 @@ pub fn diagnose_drive(
         heldout_simulation: Some(heldout_simulation),
         final_model: Some(final_model),
     })
+}
+
+/// Refuses runs whose recorded position moves against the input: the unconstrained sliding
+/// least squares of the most general structure (inertia, restoring shape, dry level, viscous
+/// level, constant force) gives a negative inertia and a negative viscous coefficient, i.e.
+/// the input accelerates the axis backwards and motion feeds energy in. A rig's encoder or
+/// motor wired the other way round, not a friction effect: every fit would be nonsense.
+fn reversed_sign(
+    fit: &[&Prepared],
+    th: &super::prep::Thresholds,
+    motion: Motion,
+    center: f64,
+) -> Result<(), DiagnoseError> {
+    let mut cols: [Vec<f64>; 5] = Default::default();
+    let mut y = Vec::new();
+    for p in fit {
+        for i in 0..p.run.x.len() {
+            let v = p.v[i];
+            if v.abs() > th.v_slide {
+                cols[0].push(p.a[i]);
+                cols[1].push(super::estimate::restoring_shape(motion, p.run.x[i], center));
+                cols[2].push(v.signum());
+                cols[3].push(v);
+                cols[4].push(1.0);
+                y.push(p.run.u[i]);
+            }
+        }
+    }
+    if y.len() < 4 * cols.len() {
+        return Ok(());
+    }
+    let refs: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
+    match crate::fit::ls(&refs, &y) {
+        Some(th) if th[0] < 0.0 && th[3] < 0.0 => Err(DiagnoseError::Input(format!(
+            "the recorded position moves against the input: the sliding samples give a negative inertia ({:.3e}) and a negative viscous friction ({:.3e}); the sign of `x` or of `u` is reversed (an encoder or a motor wired the other way round): negate one of the two columns",
+            th[0], th[3]
+        ))),
+        _ => Ok(()),
+    }
 }
 
 fn finite_or_zero(x: f64) -> f64 {
