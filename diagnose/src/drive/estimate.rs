@@ -7,8 +7,10 @@
 //!    coefficient is kept in its physical range by an active-set solve (`J` above a floor,
 //!    `k`, `Fk`, `D` >= 0) and a coefficient held at its bound is flagged.
 //! 2. Breakaway at first motion: per fitting run and direction, the applied force net of the
-//!    modelled position force and offset at the first sample moving faster than `v_move`; the
-//!    median over runs. Its scatter is that of every rest-to-motion onset in the fitting runs.
+//!    modelled position force and offset where the motion starts ([`super::prep::onset`]: the
+//!    first sample moving faster than `v_move`, walked back to the start of the rise); the
+//!    median over runs. Without stiction the one dry level is this or the sliding least
+//!    squares' ([`DryLevel`], chosen by the caller on the fitting runs). Its scatter is that of every rest-to-motion onset in the fitting runs.
 //! 3. Kinetic friction above the breakaway level is clamped to it (flagged): the hybrid model
 //!    needs `breakaway >= kinetic`.
 //!

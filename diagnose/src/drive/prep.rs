@@ -1,11 +1,13 @@
 //! Stage 1 of the single-axis pipeline: recorded runs on a uniform grid, with velocity and
 //! acceleration estimates and the motion thresholds derived from the data themselves.
 //!
-//! Derivatives are local quadratic (Savitzky-Golay) fits over `2 W + 1 = 5` samples, run by run
-//! (never across a run boundary), shortened at the ends. They are used for the sliding-phase
+//! Derivatives are local quadratic (Savitzky-Golay) fits over `2 w + 1` samples, run by run
+//! (never across a run boundary), shortened at the ends; `w` ([`window`]) is chosen from the
+//! data's position noise and motion (5 samples at 67 Hz, more at kHz rates or with a coarse
+//! encoder), never a fixed count for every rig. They are used for the sliding-phase
 //! least squares and to find where the axis moves; the final judgement is always a simulation.
 
-/// Half window of the Savitzky-Golay derivative estimate [samples].
+/// Smallest half window of the Savitzky-Golay derivative estimate [samples].
 pub const W: usize = 2;
 
 /// One recorded run of a single drive, on a uniform time grid.
