@@ -10,6 +10,47 @@
 //! Entry point: [`diagnose`] (a data-set directory) or [`diagnose_dataset`] (in memory).
 //! [`hidden`] is the hidden-effect generator the tests use (a virtual rig with one seeded
 //! random effect).
+//!
+//! ## Strangers' rigs
+//!
+//! `tests/strangers.rs` synthesises 14 plausible single-axis rigs with the project's drive
+//! model, writes each as a data set (CSV + `dataset.toml`) and diagnoses it end to end
+//! (`cargo test -p crane-diagnose --test strangers -- --nocapture`, about 5 s). Before: the
+//! pipeline as built against EMPS and CICESE (commit `d62ac5e`); after: this version. NMAE is
+//! the held-out simulated position NMAE baseline -> final model; `J` the fitted inertia.
+//!
+//! | rig | truth | before | after |
+//! |---|---|---|---|
+//! | linear, N, 1 kHz, 2 kg | Coulomb 4 N + viscous, nothing hidden | `input_delay` (8, grid edge) + stiction + dead band; 18.4 -> 1.2 % | `none`; 0.14 %; J 2.00, Fk 4.02 |
+//! | rotary, N m, 200 Hz | pendulum 2 N m about 0.3 rad | `restoring_force` + delay 5 + stiction + offset | `restoring_force` only (k 2.01, c 0.28); 0.44 % |
+//! | rotary, A, gain unknown, 2 kHz, J 2e-5 | friction twice as large moving negative | `stiction` + offset; 75.7 -> 39.8 %; J 7x low | `none`; 0.15 %; J, Fk+/-, D+/- within 1 % |
+//! | linear, V, known gain, 500 Hz, 80 kg | stiction 70 / 40 N, 2 s rests | `stiction` + delay 8; J 30 kg | `stiction` only (70.6 / 40.0 N); 5.9 -> 0.18 %; J 80.0 |
+//! | linear, V, 100 Hz, 20 % stamp jitter | spring 100 N/m + dead band 0.4 V | `restoring_force` + delay 6; J 0.06 kg | `restoring_force` only (k 122); 2.3 %; dead band absorbed in the dry level |
+//! | rotary, V, gain unknown, 1 kHz, noisy | 4-sample input delay | `force_offset` (delay missed); 62 -> 21 % | `input_delay` 4; 8.5 -> 0.75 % |
+//! | vertical linear, A, 1 kHz | constant load -m g (offset) | `force_offset` + stiction + delay | `force_offset` only (-24.4 N; the rest in the dry levels) ; 49 -> 0.11 % |
+//! | linear, N, forward only | nothing hidden | `stiction`; 25 -> 8 % | `none`; 0.11 %; negative direction flagged not fitted |
+//! | linear, input below breakaway | never moves | error "never move" | same |
+//! | one 0.6 s run, 100 Hz | nothing hidden | `input_delay` (8, grid edge); J 1.8e-3 of 1 | `unexplained`, "not identifiable" (one motion) |
+//! | rotary, 10 kg m^2, 500 Hz | viscous 5 / 15 by direction | `force_offset` + delay + stiction | `none`; 0.08 %; D 4.9 / 14.2 |
+//! | belt, V, 1 kHz | dead band 1 V (a third of the input) | `stiction` + `input_deadzone` 0.9 V; 3.8 -> 0.3 % | `none`: 0.99 %, the band in the dry level (5.1 N) |
+//! | rotary, encoder reversed | position counts against the input | `unexplained`, NMAE 2e5 % | error: "the recorded position moves against the input ... a sign is reversed" |
+//! | PD loop declared as `[controller]`, 1 kHz | nothing hidden | `input_delay` (1 sample) + dead band | `none` |
+//!
+//! What changed (each general, none tuned to a rig): the derivative window follows the
+//! data's noise and rate ([`drive::prep::window`]: 5 samples at 2 kHz made one encoder count
+//! an acceleration spike and biased every inertia low); the breakaway is read where the motion
+//! starts, not where 2 % of the peak speed is crossed ([`drive::prep::onset`]); without
+//! stiction the dry level comes from the sliding least squares when it simulates the fitting
+//! runs clearly better ([`drive::estimate::DryLevel`]); no cause is tried once the model is
+//! within the `none` level, from a single motion, or with the inertia undetermined; delay and
+//! dead-band grid points are chosen on the fitting runs; a reversed sign is refused with its
+//! fix; on closed-loop data a one-sample delay (the zero-order hold's) is not named and a
+//! finding must cut the force NMAE as well as the squared error.
+//!
+//! Known limits, measured with 8 other input draws (`STRANGERS_SEED=0..7`): on the closed-loop
+//! PD rig the inverse-dynamics path still names a small dead band, stiction, localized
+//! friction or a 2-sample delay on 4 of the 8 (force NMAE cuts of 0.01-0.53 points); on the
+//! spring + dead band rig one of the 8 names a 2-sample delay for the dead band.
 
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]

@@ -7,8 +7,10 @@
 //!    coefficient is kept in its physical range by an active-set solve (`J` above a floor,
 //!    `k`, `Fk`, `D` >= 0) and a coefficient held at its bound is flagged.
 //! 2. Breakaway at first motion: per fitting run and direction, the applied force net of the
-//!    modelled position force and offset at the first sample moving faster than `v_move`; the
-//!    median over runs. Its scatter is that of every rest-to-motion onset in the fitting runs.
+//!    modelled position force and offset where the motion starts ([`super::prep::onset`]: the
+//!    first sample moving faster than `v_move`, walked back to the start of the rise); the
+//!    median over runs. Without stiction the one dry level is this or the sliding least
+//!    squares' ([`DryLevel`], chosen by the caller on the fitting runs). Its scatter is that of every rest-to-motion onset in the fitting runs.
 //! 3. Kinetic friction above the breakaway level is clamped to it (flagged): the hybrid model
 //!    needs `breakaway >= kinetic`.
 //!
@@ -16,7 +18,7 @@
 //! axis only says that its net force stayed inside the breakaway band, which is what the
 //! simulation scores.
 
-use super::prep::{motions, Prepared, Thresholds};
+use super::prep::{motions, onset, Prepared, Thresholds};
 use crane_model::drive::{DriveParams, Motion, PositionForce};
 use crane_model::extensions::deadband;
 use std::fmt;
@@ -177,6 +179,8 @@ pub struct Estimate {
     pub slip_gaps: [Vec<f64>; 2],
     /// Sliding samples used.
     pub rows: usize,
+    /// Where the dry-friction level of a structure without stiction came from.
+    pub level: DryLevel,
 }
 
 /// Why a structure cannot be fitted.
@@ -221,13 +225,27 @@ pub fn applied_input(u: &[f64], i: usize, s: &Structure) -> f64 {
     deadband(u.get(j).copied().unwrap_or(0.0), s.deadband)
 }
 
-/// Fits a structure on the fitting runs.
+/// Where a structure without stiction takes its one dry-friction level from (per direction).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DryLevel {
+    /// The net force where the axis leaves rest at the start of each fitting run (median):
+    /// right for short stick-slip motions, where few samples slide.
+    FirstMotion,
+    /// The sliding least squares: right for long slides, where the few run starts give a
+    /// noisy median.
+    Sliding,
+}
+
+/// Fits a structure on the fitting runs; `level` matters only without stiction (with it, the
+/// breakaway is always measured at first motion and the kinetic level by the energy balance).
 pub fn estimate(
     fit: &[&Prepared],
     th: &Thresholds,
     motion: Motion,
     center: f64,
     s: Structure,
+    level: DryLevel,
 ) -> Result<Estimate, EstimateError> {
     // --- 1. sliding least squares -------------------------------------------------------
     let mut rows: Vec<(f64, f64, f64, f64, f64)> = Vec::new(); // (F, a, shape, v, x)
@@ -295,13 +313,15 @@ pub fn estimate(
                 // first motion: the run must start at rest
                 if p.v.iter().take(3).all(|v| v.abs() <= th.v_move) {
                     if let Some(&(i, _)) = m.first() {
-                        first_motion[dir.index()].push(sg * net(p, i));
+                        let o = onset(p, i, sg);
+                        first_motion[dir.index()].push(sg * net(p, o));
                     }
                 }
                 // every onset after at least 3 samples at rest
                 for &(i, _) in &m {
                     if i >= 3 && p.v[i - 3..i].iter().all(|v| v.abs() <= th.v_move) {
-                        onsets[dir.index()].push(sg * net(p, i));
+                        let o = onset(p, i, sg);
+                        onsets[dir.index()].push(sg * net(p, o));
                     }
                 }
             }
@@ -338,6 +358,9 @@ pub fn estimate(
             ls.offset,
             ls.visc,
         );
+        if !s.stiction && level == DryLevel::Sliding {
+            brk = kinetic_ls;
+        }
         let mut fixed = brk;
         for dir in Dir::BOTH {
             let d = dir.index();
@@ -411,6 +434,7 @@ pub fn estimate(
         kinetic_ls,
         slip_gaps: gaps,
         rows: rows.len(),
+        level,
     })
 }
 
@@ -633,6 +657,7 @@ fn slip_gaps(
                 if !(rest_before && rest_after) {
                     continue;
                 }
+                let a = onset(p, a, sg).max(1);
                 let (lo, hi) = (a - 1, (b + 1).min(n - 1));
                 let dx_total = x[hi] - x[lo];
                 if sg * dx_total <= 0.0 {

@@ -2,8 +2,9 @@
 //! the cause, and the gain proved by simulating held-out runs.
 //!
 //! Stages (one file each):
-//! 1. [`prep`]: runs on a uniform grid, Savitzky-Golay velocity and acceleration, motion
-//!    thresholds from the data (relative to the fastest motion, floored at the encoder step).
+//! 1. [`prep`]: runs on a uniform grid, Savitzky-Golay velocity and acceleration over a window
+//!    chosen from the data's noise, motion thresholds from the data (relative to the fastest
+//!    motion, floored at the encoder step).
 //! 2. [`estimate`]: one estimator for every model structure (sliding least squares with
 //!    physical bounds, breakaway at first motion, breakaway >= kinetic).
 //! 3. [`score`]: every structure is simulated from the recorded input with the hybrid

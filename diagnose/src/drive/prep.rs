@@ -1,11 +1,13 @@
 //! Stage 1 of the single-axis pipeline: recorded runs on a uniform grid, with velocity and
 //! acceleration estimates and the motion thresholds derived from the data themselves.
 //!
-//! Derivatives are local quadratic (Savitzky-Golay) fits over `2 W + 1 = 5` samples, run by run
-//! (never across a run boundary), shortened at the ends. They are used for the sliding-phase
+//! Derivatives are local quadratic (Savitzky-Golay) fits over `2 w + 1` samples, run by run
+//! (never across a run boundary), shortened at the ends; `w` ([`window`]) is chosen from the
+//! data's position noise and motion (5 samples at 67 Hz, more at kHz rates or with a coarse
+//! encoder), never a fixed count for every rig. They are used for the sliding-phase
 //! least squares and to find where the axis moves; the final judgement is always a simulation.
 
-/// Half window of the Savitzky-Golay derivative estimate [samples].
+/// Smallest half window of the Savitzky-Golay derivative estimate [samples].
 pub const W: usize = 2;
 
 /// One recorded run of a single drive, on a uniform time grid.
@@ -32,19 +34,110 @@ pub struct Prepared {
     pub v: Vec<f64>,
     /// Acceleration [m/s^2 or rad/s^2].
     pub a: Vec<f64>,
+    /// Half window of the derivative estimates [samples].
+    pub w: usize,
 }
 
 impl Prepared {
-    /// Estimates velocity and acceleration of a run.
+    /// Estimates velocity and acceleration of a run (half window [`W`]).
     pub fn new(run: DriveRun) -> Prepared {
-        let (v, a) = derivatives(&run.x, run.dt);
-        Prepared { run, v, a }
+        Prepared::with_window(run, W)
+    }
+
+    /// Estimates velocity and acceleration of a run over `2 w + 1` samples (see [`window`]).
+    pub fn with_window(run: DriveRun, w: usize) -> Prepared {
+        let (v, a) = derivatives_over(&run.x, run.dt, w);
+        Prepared { run, v, a, w }
+    }
+}
+
+/// Largest half window of the derivative estimate [samples].
+pub const MAX_W: usize = 64;
+/// Largest acceleration noise accepted, as a fraction of the RMS acceleration of the runs.
+pub const ACCEL_NOISE_FRACTION: f64 = 0.1;
+
+/// The half window of the derivative estimates for these runs: the smallest, from [`W`] up,
+/// whose acceleration noise (the position noise propagated through the quadratic fit) is at
+/// most [`ACCEL_NOISE_FRACTION`] of the RMS acceleration the window sees while the axis
+/// moves. A fixed number of samples is not a rule for every rig: at 2 kHz five samples span
+/// 2.5 ms and one encoder count becomes an acceleration spike far above the motion's, which
+/// biases the inertia towards 0 (noise in a regressor); at 67 Hz (CICESE) the same five
+/// samples are right. The position noise is the larger of the encoder step's (`q / sqrt 12`)
+/// and a robust scale of the third differences (`median |d3 x| / (0.6745 sqrt 20)`, rests
+/// included; third differences of a smooth motion are `x''' dt^3`, far below the noise's
+/// except at the lowest rates, where the window stays short anyway).
+pub fn window(runs: &[DriveRun]) -> usize {
+    let mut dd: Vec<f64> = Vec::new();
+    let mut quantum = f64::INFINITY;
+    for r in runs {
+        for k in 1..r.x.len().saturating_sub(2) {
+            dd.push((r.x[k + 2] - 3.0 * r.x[k + 1] + 3.0 * r.x[k] - r.x[k - 1]).abs());
+        }
+        for w in r.x.windows(2) {
+            let d = (w[1] - w[0]).abs();
+            if d > 0.0 {
+                quantum = quantum.min(d);
+            }
+        }
+    }
+    dd.retain(|d| d.is_finite());
+    let mut sigma = if quantum.is_finite() {
+        quantum / 12f64.sqrt()
+    } else {
+        0.0
+    };
+    if !dd.is_empty() {
+        dd.sort_by(f64::total_cmp);
+        sigma = sigma.max(dd[dd.len() / 2] / (0.6745 * 20f64.sqrt()));
+    }
+    if sigma.is_nan() || sigma <= 0.0 {
+        return W;
+    }
+    let shortest = runs.iter().map(|r| r.x.len()).min().unwrap_or(0);
+    let mut w = W;
+    loop {
+        // the quadratic fit's second-derivative weights: (k^2 - m) / S, m = w (w + 1) / 3
+        let m = (w * (w + 1)) as f64 / 3.0;
+        let s: f64 = (0..=2 * w)
+            .map(|j| {
+                let k = j as f64 - w as f64;
+                (k * k - m) * (k * k - m)
+            })
+            .sum();
+        let (mut ss, mut n, mut noise) = (0.0, 0usize, 0.0);
+        for r in runs {
+            if r.dt.is_nan() || r.dt <= 0.0 {
+                continue;
+            }
+            noise += 2.0 * sigma / (s.sqrt() * r.dt * r.dt);
+            let (v, a) = derivatives_over(&r.x, r.dt, w);
+            let v_peak = v.iter().fold(0.0f64, |p, v| p.max(v.abs()));
+            for (vi, ai) in v.iter().zip(&a) {
+                if vi.abs() > SLIDE_FRACTION * v_peak {
+                    ss += ai * ai;
+                    n += 1;
+                }
+            }
+        }
+        let noise = noise / runs.len().max(1) as f64;
+        let rms = if n > 0 { (ss / n as f64).sqrt() } else { 0.0 };
+        let next = (w * 3).div_ceil(2);
+        if noise <= ACCEL_NOISE_FRACTION * rms || next > MAX_W || 4 * next + 2 > shortest {
+            return w;
+        }
+        w = next;
     }
 }
 
 /// Velocity and acceleration by local quadratic least squares over `2 W + 1` samples
 /// (fewer at the ends; a run shorter than 3 samples gets zeros).
 pub fn derivatives(x: &[f64], dt: f64) -> (Vec<f64>, Vec<f64>) {
+    derivatives_over(x, dt, W)
+}
+
+/// Same as [`derivatives`] over `2 w + 1` samples (`w >= 1`).
+pub fn derivatives_over(x: &[f64], dt: f64, w: usize) -> (Vec<f64>, Vec<f64>) {
+    let w = w.max(1);
     let n = x.len();
     let mut v = vec![0.0; n];
     let mut a = vec![0.0; n];
@@ -52,8 +145,8 @@ pub fn derivatives(x: &[f64], dt: f64) -> (Vec<f64>, Vec<f64>) {
         return (v, a);
     }
     for i in 0..n {
-        let lo = i.saturating_sub(W);
-        let hi = (i + W + 1).min(n);
+        let lo = i.saturating_sub(w);
+        let hi = (i + w + 1).min(n);
         // centred moments of k = j - i over the window
         let (mut s0, mut s1, mut s2, mut s3, mut s4) = (0.0, 0.0, 0.0, 0.0, 0.0);
         let (mut b0, mut b1, mut b2) = (0.0, 0.0, 0.0);
@@ -175,6 +268,37 @@ pub fn motions(v: &[f64], v_th: f64, sign: f64) -> Vec<(usize, usize)> {
     out
 }
 
+/// Where a motion detected at sample `i` (its first sample faster than the motion threshold,
+/// direction `sign`) left rest: the velocity extrapolated back to 0 with the acceleration
+/// estimated at `i`, walking back only while the estimated velocity keeps falling and stays on
+/// the side of the motion (so a creep or a noise wiggle before the slip stops it), and at most
+/// `2 v / a` seconds plus the derivative's half window (`v / a` is the time since rest at a
+/// constant acceleration, `2 v / a` with an acceleration growing linearly from 0, as under a
+/// force ramp), then moved `w - 1` samples later (the smoothing's lead). A threshold relative to the fastest motion is crossed late when the force
+/// rises fast (a step or a steep ramp at a high sampling rate): the force there is above the
+/// breakaway level by the force rise over that lag, which this removes. Never after `i`.
+pub fn onset(p: &Prepared, i: usize, sign: f64) -> usize {
+    let (v, a, dt) = (&p.v, &p.a, p.run.dt);
+    let (vi, ai) = (sign * v[i], sign * a[i]);
+    if !(vi > 0.0 && ai > 0.0 && dt > 0.0) {
+        return i;
+    }
+    let back = (2.0 * vi / ai / dt).floor() + p.w as f64;
+    let earliest = if back.is_finite() && back < i as f64 {
+        i - back as usize
+    } else {
+        0
+    };
+    let mut j = i;
+    while j > earliest && sign * v[j - 1] > 0.0 && sign * v[j - 1] < sign * v[j] {
+        j -= 1;
+    }
+    // the local fit over `2 w + 1` samples sees a motion starting at `t0` from `t0 - w + 1` on
+    // (its velocity weights are odd in the offset): the first sample of the rise is `w - 1`
+    // samples early
+    (j + p.w.saturating_sub(1)).min(i)
+}
+
 /// Whether a run moves at all (a motion in either direction).
 pub fn moves(v: &[f64], v_th: f64) -> bool {
     !motions(v, v_th, 1.0).is_empty() || !motions(v, v_th, -1.0).is_empty()
@@ -225,6 +349,75 @@ mod tests {
             let (v, a) = derivatives(&x, 0.01);
             assert_eq!(v.len(), n);
             assert!(v.iter().chain(&a).all(|q| q.is_finite()));
+        }
+    }
+
+    fn run(dt: f64, x: Vec<f64>) -> DriveRun {
+        DriveRun {
+            name: "r".into(),
+            held_out: false,
+            dt,
+            u: vec![0.0; x.len()],
+            x,
+        }
+    }
+
+    /// A smooth swing of 0.1 m at 1 Hz, sampled at `hz` and quantised to `q`.
+    fn swing(hz: f64, q: f64) -> DriveRun {
+        let dt = 1.0 / hz;
+        let n = (4.0 * hz) as usize;
+        let x = (0..n)
+            .map(|k| {
+                let y = 0.1 * (std::f64::consts::TAU * k as f64 * dt).sin();
+                if q > 0.0 {
+                    (y / q).round() * q
+                } else {
+                    y
+                }
+            })
+            .collect();
+        run(dt, x)
+    }
+
+    #[test]
+    fn the_window_grows_with_the_rate_and_the_encoder_step_not_otherwise() {
+        // 67 Hz with a fine encoder: the five samples of the CICESE logs
+        assert_eq!(window(&[swing(67.0, 1e-7)]), W);
+        // 2 kHz with a 10 um encoder: five samples would see one count as 40 m/s^2 against
+        // the swing's 4 m/s^2
+        let w = window(&[swing(2000.0, 1e-5)]);
+        assert!(w > 4 * W, "half window {w}");
+        let (_, a) = derivatives_over(&swing(2000.0, 1e-5).x, 5e-4, w);
+        let peak = a.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+        let want = 0.1 * std::f64::consts::TAU.powi(2);
+        assert!((peak - want).abs() < 0.25 * want, "peak {peak} vs {want}");
+    }
+
+    #[test]
+    fn the_onset_of_a_motion_under_a_steep_ramp_is_found_where_it_starts() {
+        // at rest until sample 200, then x = c (k - 200)^3: the acceleration grows linearly
+        // from 0, as under a force ramp from the breakaway level
+        let dt = 1e-3;
+        let x: Vec<f64> = (0..400)
+            .map(|k| {
+                if k < 200 {
+                    0.0
+                } else {
+                    1e-6 * ((k - 200) as f64).powi(3)
+                }
+            })
+            .collect();
+        for w in [W, 6] {
+            let p = Prepared::with_window(run(dt, x.clone()), w);
+            let v_peak = p.v.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let m = motions(&p.v, MOVE_FRACTION * v_peak, 1.0);
+            let i = m[0].0;
+            let o = onset(&p, i, 1.0);
+            assert!(i > 215, "the threshold is crossed late: {i}");
+            assert!(
+                (198..=206).contains(&o),
+                "w {w}: onset {o} (threshold at {i})"
+            );
         }
     }
 }
