@@ -66,7 +66,11 @@ fn bench(c: &mut Criterion) {
         };
         for (name, run) in runs {
             g.bench_function(name, |b| match run {
-                Run::Fixed(h) => b.iter(|| reference::hybrid(&case, h, false).expect("runs")),
+                Run::Fixed(h) => b.iter(|| {
+                    reference::hybrid(&case, h, false)
+                        .expect("runs")
+                        .on_grid(&case)
+                }),
                 Run::Adaptive(r) => {
                     let tol = tolerances(&case, r);
                     b.iter(|| hybrid_adaptive(&case, &tol).expect("runs"))

@@ -68,6 +68,71 @@ impl Trajectory {
         Some(h00 * s0.qd[i] + h10 * dt * a0[i] + h01 * s1.qd[i] + h11 * dt * a1[i])
     }
 
+    /// The full state on every grid point (stride 1): the samples themselves, and between
+    /// them the cubic Hermite interpolants, positions through the samples' positions and
+    /// velocities, velocities through their velocities and accelerations (the interpolant
+    /// [`Trajectory::velocity_at_grid`] uses). A fixed-step run with steps longer than the
+    /// grid calls this inside its timed run, so that it delivers what an adaptive solver's
+    /// dense output delivers there: every component at every grid point. Modes between samples
+    /// are those of the sample before. Returns `self` unchanged at stride 1 or without
+    /// accelerations.
+    pub fn on_grid(self, case: &Case) -> Trajectory {
+        if self.stride <= 1 || self.accel.len() != self.states.len() {
+            return self;
+        }
+        let per = self.stride;
+        let n = self.grid_len();
+        let dt = per as f64 * case.sample;
+        // Hermite basis at the `per - 1` interior points, the same for every interval.
+        let basis: Vec<[f64; 4]> = (1..per)
+            .map(|r| {
+                let th = r as f64 / per as f64;
+                let (t2, t3) = (th * th, th * th * th);
+                [
+                    2.0 * t3 - 3.0 * t2 + 1.0,
+                    (t3 - 2.0 * t2 + th) * dt,
+                    -2.0 * t3 + 3.0 * t2,
+                    (t3 - t2) * dt,
+                ]
+            })
+            .collect();
+        let mut states = Vec::with_capacity(n + 1);
+        let mut modes = Vec::with_capacity(if self.modes.is_empty() { 0 } else { n + 1 });
+        for (j, pair) in self.states.windows(2).enumerate() {
+            let (s0, s1) = (&pair[0], &pair[1]);
+            let (a0, a1) = (&self.accel[j], &self.accel[j + 1]);
+            states.push(*s0);
+            if let Some(m) = self.modes.get(j) {
+                modes.push(*m);
+            }
+            for b in &basis {
+                let mut s = *s0;
+                for i in 0..5 {
+                    s.q[i] = b[0] * s0.q[i] + b[1] * s0.qd[i] + b[2] * s1.q[i] + b[3] * s1.qd[i];
+                    s.qd[i] = b[0] * s0.qd[i] + b[1] * a0[i] + b[2] * s1.qd[i] + b[3] * a1[i];
+                }
+                states.push(s);
+                if let Some(m) = self.modes.get(j) {
+                    modes.push(*m);
+                }
+            }
+        }
+        if let Some(last) = self.states.last() {
+            states.push(*last);
+        }
+        if let Some(m) = self.modes.last() {
+            modes.push(*m);
+        }
+        Trajectory {
+            stride: 1,
+            states,
+            modes,
+            accel: Vec::new(),
+            friction: Vec::new(),
+            ..self
+        }
+    }
+
     /// Number of grid points covered (after `t = 0`).
     pub fn grid_len(&self) -> usize {
         self.states.len().saturating_sub(1) * self.stride

@@ -161,3 +161,39 @@ fn events_are_located_to_tolerance() {
     );
     assert!(velocity_events >= 4, "{velocity_events} velocity events");
 }
+
+/// A fixed-step run with steps longer than the grid, put on the grid: every grid point, the
+/// compared velocity equal to the interpolant the error is scored with, positions close to the
+/// reference, the samples themselves untouched.
+#[test]
+fn a_fixed_step_run_on_the_grid_keeps_its_samples_and_the_scored_interpolant() {
+    for case in Case::all() {
+        let h = 0.025;
+        let tr = reference::hybrid(&case, h, false).expect("runs");
+        assert_eq!(tr.stride, 25);
+        let grid = tr.clone().on_grid(&case);
+        assert_eq!(grid.stride, 1);
+        assert_eq!(grid.states.len(), tr.grid_len() + 1);
+        assert_eq!(grid.modes.len(), grid.states.len());
+        for g in 0..=tr.grid_len() {
+            let v = tr.velocity_at_grid(&case, g).expect("inside the run");
+            let w = grid.states[g].qd[case.observed];
+            assert!(
+                (v - w).abs() <= 1e-12 * (1.0 + v.abs()),
+                "grid {g}: {v} vs {w}"
+            );
+            if g % tr.stride == 0 {
+                assert_eq!(grid.states[g], tr.states[g / tr.stride], "sample {g}");
+            }
+        }
+        // Positions by the Hermite interpolant through positions and velocities: within a
+        // millimetre (or milliradian) of the 10 us reference everywhere.
+        let refr = reference::reference(&case, 1e-3, 100).expect("reference");
+        for (g, s) in grid.states.iter().enumerate() {
+            for i in 0..5 {
+                let d = (s.q[i] - refr.states[g].q[i]).abs();
+                assert!(d < 1e-3, "case {} grid {g} q[{i}]: {d}", case.observed);
+            }
+        }
+    }
+}
