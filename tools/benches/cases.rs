@@ -26,7 +26,11 @@ fn bench(c: &mut Criterion) {
         };
         for &h in coarse {
             g.bench_function(format!("hybrid_h{}ms", h * 1e3), |b| {
-                b.iter(|| reference::hybrid(&case, h, false).expect("runs"))
+                b.iter(|| {
+                    reference::hybrid(&case, h, false)
+                        .expect("runs")
+                        .on_grid(&case)
+                })
             });
         }
         for gamma in GAMMAS {
