@@ -225,35 +225,3 @@ where
         evals: 0,
     })
 }
-
-/// A `tanh(gamma v)` model of `case` under BDF (the work-precision peer of
-/// [`crate::workprec::tanh_rosenbrock`]): the trajectory on the case's grid and the solver's
-/// work.
-pub fn tanh_bdf(
-    case: &crate::cases::Case,
-    gamma: f64,
-    opts: &Options,
-) -> crate::error::Result<(crate::reference::Trajectory, Stats)> {
-    use crate::smooth::{pack, unpack, Friction, Smooth};
-    let sys = Smooth::new(&case.params, Friction::Tanh(gamma), case.held);
-    let n = case.samples();
-    let mut tr = crate::reference::Trajectory {
-        h: 0.0,
-        stride: 1,
-        states: Vec::with_capacity(n + 1),
-        ..Default::default()
-    };
-    tr.states.push(case.init);
-    let stats = integrate(
-        |t, y| sys.rhs(y, &case.u_at(t)).ok(),
-        0.0,
-        pack(&case.init),
-        case.sample,
-        n,
-        opts,
-        |_, _, y| tr.states.push(unpack(y)),
-    )
-    .map_err(|failure| crate::error::Error::Bdf { gamma, failure })?;
-    tr.steps = stats.accepted;
-    Ok((tr, stats))
-}

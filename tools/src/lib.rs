@@ -35,4 +35,5 @@ pub mod output;
 pub mod reference;
 pub mod smooth;
 pub mod study;
+pub mod tanh_run;
 pub mod workprec;

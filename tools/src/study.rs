@@ -219,27 +219,7 @@ pub fn tanh_ode45(
     gamma: f64,
     opts: &ode45::Options,
 ) -> Result<(Trajectory, ode45::Stats)> {
-    let sys = Smooth::new(&case.params, Friction::Tanh(gamma), case.held);
-    let n = case.samples();
-    let mut tr = Trajectory {
-        h: 0.0,
-        stride: 1,
-        states: Vec::with_capacity(n + 1),
-        ..Trajectory::default()
-    };
-    tr.states.push(case.init);
-    let stats = ode45::integrate(
-        |t, y| sys.rhs(y, &case.u_at(t)).ok(),
-        0.0,
-        pack(&case.init),
-        case.sample,
-        n,
-        opts,
-        |_, _, y| tr.states.push(unpack(y)),
-    )
-    .map_err(|failure| Error::Ode45 { gamma, failure })?;
-    tr.steps = stats.accepted;
-    Ok((tr, stats))
+    crate::tanh_run::tanh_run(case, gamma, crate::tanh_run::GridSolver::Dp45, opts)
 }
 
 /// A tanh model of the case by fixed-step RK4 at step `h` (continuous-time input at the

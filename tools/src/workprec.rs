@@ -18,13 +18,12 @@
 //! and the fastest `tanh` setting (any gamma, per solver) whose error is at most that level.
 
 use crate::adaptive_run::{hybrid_adaptive, tolerances};
-use crate::bdf::tanh_bdf;
 use crate::cases::Case;
 use crate::error::{Error, Result};
+use crate::ode45;
 use crate::output::Outputs;
 use crate::reference::{self, Trajectory};
 use crate::study::{tanh_name, tanh_ode45, time_best};
-use crate::{ode23s, ode45};
 use plotters::prelude::*;
 use serde::Serialize;
 use std::path::Path;
@@ -132,31 +131,16 @@ pub fn tanh_rosenbrock(
     gamma: f64,
     opts: &ode45::Options,
 ) -> Result<(Trajectory, ode45::Stats)> {
-    use crate::smooth::{pack, unpack, Friction, Smooth};
-    let sys = Smooth::new(&case.params, Friction::Tanh(gamma), case.held);
-    let n = case.samples();
-    let mut tr = Trajectory {
-        h: 0.0,
-        stride: 1,
-        states: Vec::with_capacity(n + 1),
-        ..Trajectory::default()
-    };
-    tr.states.push(case.init);
-    let stats = ode23s::integrate(
-        |t, y| sys.rhs(y, &case.u_at(t)).ok(),
-        0.0,
-        pack(&case.init),
-        case.sample,
-        n,
-        opts,
-        |_, _, y| tr.states.push(unpack(y)),
-    )
-    .map_err(|e| Error::Rosenbrock {
-        gamma,
-        failure: e.to_string(),
-    })?;
-    tr.steps = stats.accepted;
-    Ok((tr, stats))
+    crate::tanh_run::tanh_run(case, gamma, crate::tanh_run::GridSolver::Rosenbrock, opts)
+}
+
+/// A `tanh` model of the case under `diffsol`'s BDF ([`crate::bdf`]).
+pub fn tanh_bdf(
+    case: &Case,
+    gamma: f64,
+    opts: &ode45::Options,
+) -> Result<(Trajectory, ode45::Stats)> {
+    crate::tanh_run::tanh_run(case, gamma, crate::tanh_run::GridSolver::Bdf, opts)
 }
 
 fn tanh_opts(rtol: f64) -> ode45::Options {

@@ -2,11 +2,12 @@
 //! solution, convergence as the tolerance tightens, the `tanh` model of case 2 against
 //! Dormand-Prince at a tight tolerance, and a failing right-hand side.
 
-use crane_tools::bdf::{integrate, tanh_bdf, Failure};
+use crane_tools::bdf::{integrate, Failure};
 use crane_tools::cases::Case;
 use crane_tools::ode45::Options;
 use crane_tools::reference;
 use crane_tools::study::tanh_ode45;
+use crane_tools::workprec::tanh_bdf;
 
 const LAMBDA: f64 = 1e4;
 
