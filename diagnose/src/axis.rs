@@ -45,8 +45,13 @@ pub const BOOT_REPS: usize = 400;
 /// bootstrap: long enough (a twentieth of the rows) to carry the residual's serial
 /// correlation after the derivative filter.
 pub const BOOT_BLOCKS: usize = 20;
-/// Family-wise one-sided level of the bootstrap test, shared by the candidates tried.
-pub const BOOT_FAMILY_LEVEL: f64 = 0.05;
+/// One-sided level of the bootstrap test: a finding's cut is positive in at least
+/// `1 - BOOT_LEVEL` of the replicates. Not divided among the candidates (Bonferroni): the
+/// bootstrap is already conservative where the baseline extrapolates (a replicate that leaves
+/// a position range unfitted blows both errors up), and at 1.25 % a real 3-sample delay on
+/// the closed-loop PD rig (held-out cut 85 %, positive in 380-400 of 400 replicates) was lost
+/// on 3 of 9 draws; the rig with nothing hidden stays below 78 % on all 9.
+pub const BOOT_LEVEL: f64 = 0.05;
 
 /// Shortest stretch at rest that is cut out of the inverse-dynamics rows [s]: far longer than
 /// a reversal takes (EMPS has none over 7 ms), so only an axis that really holds still is cut.
@@ -567,9 +572,8 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
         })
         .collect();
     scored.sort_by(|a, b| a.1.total_cmp(&b.1));
-    // the noise floor of every cut: its bootstrap lower bound at a family-wise 5 % over the
-    // candidates tried (Bonferroni)
-    let level = BOOT_FAMILY_LEVEL / scored.len().max(1) as f64;
+    // the noise floor of every cut: its one-sided bootstrap lower bound
+    let level = BOOT_LEVEL;
     let lower: Vec<f64> = scored
         .iter()
         .map(|(c, _)| {
@@ -591,7 +595,7 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
         // polynomial extrapolates, and any extra column that moves it cuts one held-out run
         // by chance (a PD rig with nothing hidden "found" a dead band, stiction, localized
         // friction or a delay on 4 of 9 input draws, cuts of 5-35 % that the bootstrap puts
-        // at chance: positive in 60-80 % of the replicates).
+        // at chance: positive in 60-78 % of the replicates).
         measures.insert(format!("bootstrap_cut_lower_{}", c.cause), *low);
         let ok = *b < FORCE_BIC_MAX
             && c.sse_h < (1.0 - MIN_CUT) * sse0
