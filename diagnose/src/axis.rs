@@ -39,7 +39,7 @@ struct Part {
 
 const MAXD: usize = 12;
 
-/// Bootstrap replicates of every candidate's held-out cut ([`bootstrap_cuts`]).
+/// Bootstrap replicates of every candidate's held-out cut (`bootstrap_cuts`).
 pub const BOOT_REPS: usize = 400;
 /// Contiguous blocks the fitting rows and the held-out rows are each cut into for the
 /// bootstrap: long enough (a twentieth of the rows) to carry the residual's serial
