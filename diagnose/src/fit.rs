@@ -5,7 +5,13 @@ use crane_ident::linalg::solve_dense;
 /// Least squares `y ~ X theta` by normal equations (a handful of columns), with a tiny ridge
 /// relative to each diagonal so collinear columns give a finite answer.
 pub fn ls(cols: &[&[f64]], y: &[f64]) -> Option<Vec<f64>> {
+    ls_weighted(cols, y, None)
+}
+
+/// [`ls`] with a weight per row (`None`: all 1), e.g. the counts of a bootstrap resample.
+pub fn ls_weighted(cols: &[&[f64]], y: &[f64], w: Option<&[f64]>) -> Option<Vec<f64>> {
     let p = cols.len();
+    let wt = |k: usize| w.map_or(1.0, |w| w[k]);
     if p == 0 {
         return Some(Vec::new());
     }
@@ -13,11 +19,11 @@ pub fn ls(cols: &[&[f64]], y: &[f64]) -> Option<Vec<f64>> {
     let mut b = vec![0.0; p];
     for i in 0..p {
         for j in i..p {
-            let s: f64 = cols[i].iter().zip(cols[j]).map(|(x, z)| x * z).sum();
+            let s: f64 = (0..y.len()).map(|k| wt(k) * cols[i][k] * cols[j][k]).sum();
             a[i][j] = s;
             a[j][i] = s;
         }
-        b[i] = cols[i].iter().zip(y).map(|(x, z)| x * z).sum();
+        b[i] = (0..y.len()).map(|k| wt(k) * cols[i][k] * y[k]).sum();
     }
     for (i, row) in a.iter_mut().enumerate() {
         let d = row[i];
@@ -35,6 +41,13 @@ pub fn sse(cols: &[&[f64]], theta: &[f64], y: &[f64]) -> f64 {
         s += (yk - pred) * (yk - pred);
     }
     s
+}
+
+/// The residual `y - X theta`, row by row.
+pub fn residual(cols: &[&[f64]], theta: &[f64], y: &[f64]) -> Vec<f64> {
+    (0..y.len())
+        .map(|k| y[k] - cols.iter().zip(theta).map(|(c, t)| c[k] * t).sum::<f64>())
+        .collect()
 }
 
 /// Mean absolute value of `y - X theta`.

@@ -34,7 +34,8 @@
 //! | rotary, 10 kg m^2, 500 Hz | viscous 5 / 15 by direction | `force_offset` + delay + stiction | `none`; 0.08 %; D 4.9 / 14.2 |
 //! | belt, V, 1 kHz | dead band 1 V (a third of the input) | `stiction` + `input_deadzone` 0.9 V; 3.8 -> 0.3 % | `none`: 0.99 %, the band in the dry level (5.1 N) |
 //! | rotary, encoder reversed | position counts against the input | `unexplained`, NMAE 2e5 % | error: "the recorded position moves against the input ... a sign is reversed" |
-//! | PD loop declared as `[controller]`, 1 kHz | nothing hidden | `input_delay` (1 sample) + dead band | `none` |
+//! | PD loop declared as `[controller]`, 1 kHz | nothing hidden | `input_delay` (1 sample) + dead band | `none` (and on 9 further input draws, which named a cause on 4 before the bootstrap rule) |
+//! | the same PD loop, the drive 3 samples late | 3-sample input delay | (not tried) | `input_delay` on all 9 draws (4 samples: the zero-order hold's one on top; 5 on one draw) |
 //!
 //! What changed (each general, none tuned to a rig): the derivative window follows the
 //! data's noise and rate ([`drive::prep::window`]: 5 samples at 2 kHz made one encoder count
@@ -47,10 +48,23 @@
 //! fix; on closed-loop data a one-sample delay (the zero-order hold's) is not named and a
 //! finding must cut the force NMAE as well as the squared error.
 //!
-//! Known limits, measured with 8 other input draws (`STRANGERS_SEED=0..7`): on the closed-loop
-//! PD rig the inverse-dynamics path still names a small dead band, stiction, localized
-//! friction or a 2-sample delay on 4 of the 8 (force NMAE cuts of 0.01-0.53 points); on the
-//! spring + dead band rig one of the 8 names a 2-sample delay for the dead band.
+//! On the closed-loop path a finding must also beat its noise floor: its held-out force-NMAE
+//! cut positive in 95 % of a moving-block bootstrap that refits baseline and extension on
+//! resampled fitting blocks and scores them on resampled held-out blocks
+//! (`bootstrap_cuts` in `axis.rs`). The held-out error of one fit was not enough: with one fitting
+//! run the baseline's per-direction position quartic extrapolates on the held-out run, and any
+//! extra column that moves it cuts that run's error by chance (the PD rig with nothing hidden
+//! named a dead band, stiction, localized friction or a 2-sample delay on draws 1, 4, 6, 7 of
+//! `STRANGERS_SEED=0..8`, held-out cuts of 5-35 %, positive in only 60-78 % of the
+//! replicates; a real delay is positive in 95-100 %). `tests/strangers.rs` runs both over the 9
+//! draws. On EMPS the direction asymmetry stays (cut 12.7 %, bootstrap lower bound 9.4 %);
+//! the localized friction it also named against the symmetric baseline (cut 3.3 %) is now
+//! dropped: its bootstrap lower bound is -2.4 %.
+//!
+//! Known limits: on the spring + dead band rig some input draws (`STRANGERS_SEED=2`) name a
+//! 2-sample delay for the dead band (open-loop path, not changed here). The closed-loop
+//! baseline's quartic extrapolation itself is left as it is (it is the EMPS paper's
+//! structure); the bootstrap only keeps it from naming causes.
 
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]

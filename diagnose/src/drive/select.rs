@@ -242,6 +242,11 @@ pub fn diagnose_drive(
             note.push_str("; ");
             note.push_str(&e);
         }
+        let (identifiable, overlap) = load_overlap(cause);
+        if let Some(o) = overlap {
+            note.push_str("; ");
+            note.push_str(o);
+        }
         findings.push(Finding {
             cause,
             axis: "axis".into(),
@@ -255,7 +260,7 @@ pub fn diagnose_drive(
                 score: (scored.selection / current.selection).ln(),
                 extra_parameters: extra_parameters(cause),
                 held_out_samples: held.iter().map(|r| r.run.x.len()).sum(),
-                identifiable: true,
+                identifiable,
                 note,
             },
         });
@@ -582,6 +587,28 @@ fn physical(cause: Cause, est: &Estimate, before: &Estimate) -> (bool, Option<St
         Cause::InputDelay => (est.structure.delay > 0, None),
         // crane-only causes are never tried on a drive
         Cause::LocalizedFriction | Cause::PayloadMass => (false, None),
+    }
+}
+
+/// Whether a named cause can be told apart from the other dry-friction structure, and the
+/// note saying why not. While the axis slides, a constant load `o` (gravity on a vertical
+/// axis, a cable's pull) and direction-dependent dry friction are the same force:
+/// `Fk+ sign(v) + o` is `Fk+ - (-o)` moving positive and `-(Fk- - o)` moving negative, so
+/// sliding data fix only the two dry levels, not how they split into a load and a friction
+/// asymmetry; at rest the two differ only if the load alone moves the axis (it exceeds the
+/// breakaway), or on data with a known load change. The closed-loop path states the same
+/// (`axis.rs`).
+fn load_overlap(cause: Cause) -> (bool, Option<&'static str>) {
+    match cause {
+        Cause::ForceOffset => (
+            false,
+            Some("not identifiable apart from direction-dependent dry friction: while sliding, a constant load o is exactly the dry levels shifted (Fk+ by -o, Fk- by +o); sliding data fix the two levels, not their split into a load and an asymmetry (runs where the load alone moves the axis, or with a known load change, would)"),
+        ),
+        Cause::DirectionAsymmetry => (
+            true,
+            Some("the dry part of the asymmetry overlaps a constant load (force offset, e.g. gravity on a vertical axis): sliding data cannot split the two; the viscous part does not overlap"),
+        ),
+        _ => (true, None),
     }
 }
 
