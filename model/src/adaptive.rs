@@ -407,6 +407,8 @@ pub struct Adaptive {
     step_modes: [Mode; 3],
     stats: AdaptiveStats,
     rejected_last: bool,
+    /// The last accepted step [s] taken with a drive axis moving (infinite before one).
+    h_moving: f64,
 }
 
 impl Adaptive {
@@ -438,6 +440,7 @@ impl Adaptive {
             step_modes: modes0,
             stats: AdaptiveStats::default(),
             rejected_last: false,
+            h_moving: f64::INFINITY,
         })
     }
 
@@ -757,6 +760,9 @@ impl Adaptive {
             self.rejected_last = false;
             self.stats.accepted += 1;
             self.step_modes = self.modes;
+            if self.modes.iter().any(|m| *m != Mode::Stopped) {
+                self.h_moving = h;
+            }
             let event = self.find_event(h, &tr, u)?;
             let Some((th, kind, i)) = event else {
                 self.dense = Some(Dense {
@@ -802,8 +808,14 @@ impl Adaptive {
             self.stats.events += 1;
             let e = self.resolve(u(self.t))?;
             self.e1 = Some(e);
-            // Keep the controller's step (the event cut the step, not the error).
-            self.h = next.max(h);
+            // Keep the controller's step (the event cut the step, not the error); after a
+            // breakaway no longer than the last step taken with an axis moving: the stuck
+            // phase's steps grew with nothing moving, and the first moving step would be
+            // rejected (case 1: about one rejection per breakaway without this).
+            self.h = match kind {
+                EventKind::Breakaway => next.max(h).min(self.h_moving),
+                _ => next.max(h),
+            };
             return Ok(StepInfo {
                 t0,
                 t1: self.t,
