@@ -300,6 +300,23 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
             theta: th,
         })
     };
+    // the extra columns `ef` / `eh` on the measured force: the design and its fit
+    let fit_extra = |ef: Vec<Vec<f64>>, eh: Vec<Vec<f64>>| -> (Design, Option<Fitted>) {
+        let design = Design {
+            ef,
+            eh,
+            yf: fit.f.clone(),
+            yh: held.f.clone(),
+        };
+        let r = eval(&design.ef, &design.eh, &design.yf, &design.yh);
+        (design, r)
+    };
+    // the coefficient of the last extra column (0 without a fit)
+    let last_coef = |r: &Option<Fitted>| {
+        r.as_ref()
+            .and_then(|x| x.theta.last().copied())
+            .unwrap_or(0.0)
+    };
     let base0 = eval(&[], &[], &fit.f, &held.f)
         .ok_or_else(|| DiagnoseError::Model("baseline least squares failed".into()))?;
     let (sse0, mae0, ssef0, th0) = (base0.sse_h, base0.mae_h, base0.sse_f, base0.theta.clone());
@@ -366,17 +383,8 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
             }
         }
         if let Some((_, c, w, d)) = best {
-            let design = Design {
-                ef: vec![col(&fit, c, w, d)],
-                eh: vec![col(&held, c, w, d)],
-                yf: fit.f.clone(),
-                yh: held.f.clone(),
-            };
-            let r = eval(&design.ef, &design.eh, &design.yf, &design.yh);
-            let amp = r
-                .as_ref()
-                .and_then(|x| x.theta.last().copied())
-                .unwrap_or(0.0);
+            let (design, r) = fit_extra(vec![col(&fit, c, w, d)], vec![col(&held, c, w, d)]);
+            let amp = last_coef(&r);
             push(
                 Cause::LocalizedFriction,
                 pm(&[
@@ -422,17 +430,8 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
             }
         }
         if let Some((_, vs)) = best {
-            let design = Design {
-                ef: vec![col(&fit, vs)],
-                eh: vec![col(&held, vs)],
-                yf: fit.f.clone(),
-                yh: held.f.clone(),
-            };
-            let r = eval(&design.ef, &design.eh, &design.yf, &design.yh);
-            let amp = r
-                .as_ref()
-                .and_then(|x| x.theta.last().copied())
-                .unwrap_or(0.0);
+            let (design, r) = fit_extra(vec![col(&fit, vs)], vec![col(&held, vs)]);
+            let amp = last_coef(&r);
             let fc = if sym { th0[2] } else { 0.5 * (th0[3] + th0[8]) };
             // stiction is breakaway ABOVE sliding friction: a negative excess (ratio < 1)
             // is not stiction and is not offered as a finding
@@ -466,13 +465,7 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
                 ),
             ]
         };
-        let design = Design {
-            ef: cols(&fit),
-            eh: cols(&held),
-            yf: fit.f.clone(),
-            yh: held.f.clone(),
-        };
-        let r = eval(&design.ef, &design.eh, &design.yf, &design.yh);
+        let (design, r) = fit_extra(cols(&fit), cols(&held));
         let th = r.as_ref().map(|x| x.theta.clone()).unwrap_or_default();
         if th.len() == 6 {
             // baseline a, Fv, Fc, offset o; extras a' (v+), b (ind+):
