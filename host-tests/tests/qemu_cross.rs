@@ -19,14 +19,14 @@
 #[path = "../../twin/src/logic/mod.rs"]
 mod logic;
 
+use host_tests::qemu::{self, QemuRun};
 use logic::control::{LoopConfig, F64_SEGMENT_BUDGET};
 use logic::fastmath::F32x;
 use logic::plant::{demo_plant, run_demo, run_demo_with};
 use logic::scenarios::{run, SCENARIOS};
-use std::io::Read;
 use std::path::PathBuf;
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Command;
+use std::time::Duration;
 
 /// What the firmware prints that the host must reproduce, in the firmware's order.
 fn host_digest() -> String {
@@ -69,48 +69,24 @@ fn workspace_root() -> PathBuf {
 
 /// Runs the firmware under QEMU with a deadline; returns its stdout.
 fn run_qemu(elf: &std::path::Path, deadline: Duration) -> String {
-    let mut child = Command::new("qemu-system-arm")
-        .args([
-            "-cpu",
-            "cortex-m4",
-            "-machine",
-            "mps2-an386",
-            "-nographic",
-            "-semihosting-config",
-            "enable=on,target=native",
-            "-kernel",
-        ])
-        .arg(elf)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap_or_else(|e| panic!("cannot start qemu-system-arm ({e}); install it with `apt-get install -y --no-install-recommends qemu-system-arm`"));
-    let mut stdout = child.stdout.take().expect("piped stdout");
-    let mut stderr = child.stderr.take().expect("piped stderr");
-    let reader = std::thread::spawn(move || {
-        let mut s = String::new();
-        stdout.read_to_string(&mut s).map(|_| s)
-    });
-    let err_reader = std::thread::spawn(move || {
-        let mut s = String::new();
-        let _ = stderr.read_to_string(&mut s);
-        s
-    });
-    let start = Instant::now();
-    let status = loop {
-        if let Some(st) = child.try_wait().expect("wait for qemu") {
-            break st;
-        }
-        if start.elapsed() > deadline {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("QEMU did not finish within {deadline:?}");
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    };
-    let text = reader.join().expect("reader").expect("utf-8 stdout");
-    let err = err_reader.join().unwrap_or_default();
+    let mut qemu = Command::new("qemu-system-arm");
+    qemu.args([
+        "-cpu",
+        "cortex-m4",
+        "-machine",
+        "mps2-an386",
+        "-nographic",
+        "-semihosting-config",
+        "enable=on,target=native",
+        "-kernel",
+    ])
+    .arg(elf);
+    let QemuRun {
+        status,
+        stdout,
+        stderr: err,
+    } = qemu::run(qemu, deadline);
+    let text = String::from_utf8(stdout).expect("utf-8 stdout");
     assert!(
         status.success(),
         "firmware exited with {status} under QEMU\n--- stderr ---\n{err}\n--- last stdout lines ---\n{}",

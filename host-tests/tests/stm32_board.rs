@@ -23,12 +23,12 @@
 #[path = "../../twin/src/logic/mod.rs"]
 mod logic;
 
+use host_tests::qemu::{self, QemuRun};
 use logic::fastmath::F32x;
 use logic::plant::{demo_plant, run_demo};
-use std::io::Read;
 use std::path::PathBuf;
-use std::process::{Command, ExitStatus, Stdio};
-use std::time::{Duration, Instant};
+use std::process::{Command, ExitStatus};
+use std::time::Duration;
 
 /// Stack budget of the QEMU build's run [bytes]: 24 KiB, half again the high-water mark
 /// measured when it was set (15,452 bytes), and at most a fifth of the stack reserved in the
@@ -70,55 +70,30 @@ fn board_elf() -> PathBuf {
 fn run_board(arg: &str) -> (ExitStatus, String) {
     let elf = board_elf();
     let deadline = Duration::from_secs(240);
-    let mut child = Command::new("qemu-system-arm")
-        .args([
-            "-machine",
-            "netduinoplus2",
-            "-display",
-            "none",
-            "-monitor",
-            "none",
-            "-serial",
-            "null",
-            "-serial",
-            "stdio",
-            "-icount",
-            "shift=0,sleep=off",
-            "-semihosting-config",
-        ])
-        .arg(format!("enable=on,target=native,arg=board-stm32,arg={arg}"))
-        .arg("-kernel")
-        .arg(&elf)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap_or_else(|e| panic!("cannot start qemu-system-arm ({e}); install it with `apt-get install -y --no-install-recommends qemu-system-arm`"));
-    let mut stdout = child.stdout.take().expect("piped stdout");
-    let mut stderr = child.stderr.take().expect("piped stderr");
-    let reader = std::thread::spawn(move || {
-        let mut s = Vec::new();
-        stdout.read_to_end(&mut s).map(|_| s)
-    });
-    let err_reader = std::thread::spawn(move || {
-        let mut s = String::new();
-        let _ = stderr.read_to_string(&mut s);
-        s
-    });
-    let start = Instant::now();
-    let status = loop {
-        if let Some(st) = child.try_wait().expect("wait for qemu") {
-            break st;
-        }
-        if start.elapsed() > deadline {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("QEMU did not finish within {deadline:?}");
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    };
-    let bytes = reader.join().expect("reader").expect("read stdout");
-    let err = err_reader.join().unwrap_or_default();
+    let mut qemu = Command::new("qemu-system-arm");
+    qemu.args([
+        "-machine",
+        "netduinoplus2",
+        "-display",
+        "none",
+        "-monitor",
+        "none",
+        "-serial",
+        "null",
+        "-serial",
+        "stdio",
+        "-icount",
+        "shift=0,sleep=off",
+        "-semihosting-config",
+    ])
+    .arg(format!("enable=on,target=native,arg=board-stm32,arg={arg}"))
+    .arg("-kernel")
+    .arg(&elf);
+    let QemuRun {
+        status,
+        stdout: bytes,
+        stderr: err,
+    } = qemu::run(qemu, deadline);
     let text = String::from_utf8_lossy(&bytes).replace('\r', "");
     assert!(
         !text.is_empty(),

@@ -841,57 +841,63 @@ pub fn energy(c: &Coeffs<f64>, y: &State<f64>) -> f64 {
 }
 
 #[cfg(test)]
-#[allow(clippy::expect_used)]
 mod tests {
     use super::{locate, AdaptiveError};
 
     /// Locates the root of `g` in `(lo, hi]` on a 1 s step to `tol`; returns the point and the
     /// number of evaluations.
-    fn run(g: impl Fn(f64) -> f64, lo: f64, hi: f64, tol: f64) -> (f64, usize) {
+    fn run(
+        g: impl Fn(f64) -> f64,
+        lo: f64,
+        hi: f64,
+        tol: f64,
+    ) -> Result<(f64, usize), AdaptiveError> {
         let mut n = 0;
         let th = locate(1.0, tol, (lo, g(lo)), (hi, g(hi)), |x| {
             n += 1;
             let v = g(x);
-            Ok::<_, AdaptiveError>((v >= 0.0, v))
-        })
-        .expect("no error");
-        (th, n)
+            Ok((v >= 0.0, v))
+        })?;
+        Ok((th, n))
     }
 
     #[test]
-    fn a_smooth_crossing_is_bracketed_to_tolerance_in_few_evaluations() {
+    fn a_smooth_crossing_is_bracketed_to_tolerance_in_few_evaluations() -> Result<(), AdaptiveError>
+    {
         // A velocity through zero with curvature, as in a decelerating slip: root at 0.3.
         let g = |x: f64| (x - 0.3) * (1.0 + 4.0 * x * x);
-        let (th, n) = run(g, 0.0, 1.0, 1e-10);
+        let (th, n) = run(g, 0.0, 1.0, 1e-10)?;
         assert!(g(th) >= 0.0, "the returned point is on the violated side");
         assert!((th - 0.3).abs() <= 1e-10, "th = {th}");
         // Bisection would take ceil(log2(1e10)) = 34 (measured: 8).
         assert!(n <= 10, "{n} evaluations");
+        Ok(())
     }
 
     #[test]
-    fn a_jump_without_a_slope_still_converges_by_bisection() {
+    fn a_jump_without_a_slope_still_converges_by_bisection() -> Result<(), AdaptiveError> {
         // Only the sign carries information: the safeguard must still shrink the bracket.
         let g = |x: f64| if x >= 0.6180339887 { 1.0 } else { -1e-9 };
-        let (th, n) = run(g, 0.0, 1.0, 1e-9);
+        let (th, n) = run(g, 0.0, 1.0, 1e-9)?;
         assert!(
             (0.6180339887..=0.6180339887 + 1e-9).contains(&th),
             "th = {th}"
         );
         // Bisection: ceil(log2(1e9)) = 30; ITP: at most one more.
         assert!(n <= 31, "{n} evaluations");
+        Ok(())
     }
 
     #[test]
-    fn the_flag_decides_the_side_not_the_value() {
+    fn the_flag_decides_the_side_not_the_value() -> Result<(), AdaptiveError> {
         // A value that says "not yet" (0) where the flag says "happened" at exactly the root.
         let mut n = 0;
         let th = locate(1.0, 1e-12, (0.0, -1.0), (1.0, 1.0), |x| {
             n += 1;
-            Ok::<_, AdaptiveError>((x >= 0.25, (x - 0.25).min(0.0)))
-        })
-        .expect("no error");
+            Ok((x >= 0.25, (x - 0.25).min(0.0)))
+        })?;
         assert!(th >= 0.25 && th - 0.25 <= 1e-12, "th = {th}");
         assert!(n < super::MAX_LOCATE);
+        Ok(())
     }
 }
