@@ -4,7 +4,11 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-step() { printf '\n==> [%ss] %s\n' "$SECONDS" "$*"; }
+# Each step prints the elapsed seconds and the disk left (a CI machine once ran out of it).
+step() { printf '\n==> [%ss, %s free] %s\n' "$SECONDS" "$(df -Ph . | awk 'NR==2{print $4}')" "$*"; }
+
+# A test run is not an edit loop: incremental caches would add gigabytes to the target dir.
+export CARGO_INCREMENTAL="${CARGO_INCREMENTAL:-0}"
 
 step "toolchain parts"
 rustup target add thumbv7em-none-eabihf
@@ -106,7 +110,8 @@ venv="$(python_venv)"
 # Built with the venv's maturin (its PEP 517 hook runs `maturin` from PATH).
 PATH="$venv/bin:$PATH" "$venv/bin/python" -m pip install -q --disable-pip-version-check \
   --no-build-isolation ./python
-RAY_USAGE_STATS_ENABLED=0 "$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests
+CRANE_BIN="$fmu_target/release/crane" RAY_USAGE_STATS_ENABLED=0 \
+  "$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests
 # ---- end python ----------------------------------------------------------------------------
 
 # ---- scipy peer (issue 15): tools/scripts/scipy_peer.py's physics and event loop, in the
@@ -116,4 +121,4 @@ step "scipy peer: pytest tools/scripts/test_scipy_peer.py"
 "$venv/bin/python" -m pytest -q -p no:cacheprovider tools/scripts/test_scipy_peer.py
 # ---- end scipy peer ------------------------------------------------------------------------
 
-step "done"
+step "done (target directory: $(du -sh "${CARGO_TARGET_DIR:-target}" | cut -f1))"

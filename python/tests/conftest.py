@@ -19,20 +19,26 @@ def _target_dir() -> Path:
 
 @pytest.fixture(scope="session")
 def crane_cli() -> Path:
-    """The `crane` binary, built (or brought up to date) by cargo from this checkout with the
-    `test` profile (the artifacts `cargo test --workspace` already built in CI).
+    """The `crane` binary: `$CRANE_BIN` when set (CI passes the release binary its FMU block
+    built), else built (or brought up to date) by cargo from this checkout in release, the
+    same command as `scripts/test.sh` runs, so nothing is built twice.
 
     Skips with a reason when cargo is absent, except under CI (`CI` set), where it fails."""
+    given = os.environ.get("CRANE_BIN")
+    if given:
+        exe = Path(given)
+        assert exe.is_file(), f"CRANE_BIN={given} is not a file"
+        return exe
     cargo = shutil.which("cargo")
     if cargo is None:
         if os.environ.get("CI"):
             pytest.fail("cargo not found but CI is set: the bit-exactness test must run")
         pytest.skip("cargo not found: cannot build the `crane` CLI to compare against")
     subprocess.run(
-        [cargo, "build", "-q", "--profile", "test", "-p", "crane-tools", "--bin", "crane"],
+        [cargo, "build", "-q", "--release", "--bin", "crane"],
         cwd=ROOT,
         check=True,
     )
-    exe = _target_dir() / "debug" / "crane"
+    exe = _target_dir() / "release" / "crane"
     assert exe.is_file(), f"{exe} not built"
     return exe
