@@ -611,11 +611,14 @@ fn judge(rig: &Rig, r: &Report) -> Vec<String> {
         }
     }
     // a constant load and direction-dependent dry friction are one force while sliding: a
-    // report naming either says so (on both paths)
+    // report naming either says so (on both paths); an offset named beside a dry level per
+    // direction exceeds one of them (the load alone moves the axis) and says it is
+    // identifiable for that reason
     for f in &r.findings {
         let says = match f.cause {
             Cause::ForceOffset => {
-                !f.evidence.identifiable && f.evidence.note.contains("direction-dependent")
+                f.evidence.note.contains("direction-dependent")
+                    && (!f.evidence.identifiable || f.evidence.note.contains("exceeds"))
             }
             Cause::DirectionAsymmetry => {
                 f.evidence.note.contains("offset") || f.evidence.note.contains("load")

@@ -59,10 +59,50 @@ pub fn nmae(sim: &[f64], meas: &[f64], quantum: f64) -> f64 {
     100.0 * mae / range
 }
 
-/// NMAE of predicting no motion at all (the run's first position throughout) [%].
+/// A change of the input smaller than this fraction of the run's largest change from its
+/// first value is "nothing happening yet" for [`active_from`].
+pub const INPUT_STILL_FRACTION: f64 = 0.01;
+
+/// The first sample of a run's active part: one before the input first departs from its first
+/// value by more than [`INPUT_STILL_FRACTION`] of the run's largest departure, or the measured
+/// position from its first value by more than two position quanta, whichever comes first.
+///
+/// Every model starts at the run's first position at rest, so over a leading rest (a logger
+/// started before the test, a rig waiting for its operator) every model's error is zero:
+/// scored, that rest would only dilute each run's mean error, by as much as the wait is long.
+/// The scores, the `none` level and the report are computed from here on, so a log with 20 s
+/// of rest in front is diagnosed as the same log without it. Depends on the run only, never on
+/// the model, so every model is scored on the same samples.
+pub fn active_from(run: &Prepared, quantum: f64) -> usize {
+    let (x, u) = (&run.run.x, &run.run.u);
+    let (Some(&x0), Some(&u0)) = (x.first(), u.first()) else {
+        return 0;
+    };
+    let du_max = u.iter().fold(0.0f64, |m, &v| m.max((v - u0).abs()));
+    let du_tol = INPUT_STILL_FRACTION * du_max;
+    let dx_tol = 2.0 * quantum;
+    let first = x
+        .iter()
+        .zip(u)
+        .position(|(&xk, &uk)| (uk - u0).abs() > du_tol || (xk - x0).abs() > dx_tol)
+        .unwrap_or(0);
+    first.saturating_sub(1)
+}
+
+/// Position NMAE of a simulation of a run over the run's active part ([`active_from`]) [%].
+pub fn run_nmae(sim: &[f64], run: &Prepared, quantum: f64) -> f64 {
+    if sim.len() != run.run.x.len() {
+        return f64::INFINITY;
+    }
+    let k = active_from(run, quantum);
+    nmae(&sim[k..], &run.run.x[k..], quantum)
+}
+
+/// NMAE of predicting no motion at all (the run's first position throughout) [%], over the
+/// run's active part.
 pub fn nmae_no_motion(run: &Prepared, quantum: f64) -> f64 {
     let x0 = run.run.x.first().copied().unwrap_or(0.0);
-    nmae(&vec![x0; run.run.x.len()], &run.run.x, quantum)
+    run_nmae(&vec![x0; run.run.x.len()], run, quantum)
 }
 
 /// Simulates and scores a fit on the held-out runs; `Err` names the run whose simulation
@@ -72,7 +112,7 @@ pub fn score(est: Estimate, held: &[&Prepared], quantum: f64) -> Result<Scored, 
     let mut sims = Vec::with_capacity(held.len());
     for r in held {
         let sim = simulate(&est, r).map_err(|e| format!("{}: {e}", r.run.name))?;
-        per_run.push(nmae(&sim, &r.run.x, quantum));
+        per_run.push(run_nmae(&sim, r, quantum));
         sims.push(sim);
     }
     let nmae = if per_run.is_empty() {

@@ -3,7 +3,7 @@
 use super::cause::DRIVE_CAUSES;
 use super::estimate::{estimate, Dir, DryLevel, Estimate, Flag, Structure};
 use super::prep::{moves, DriveRun, Prepared, Thresholds};
-use super::score::{nmae, nmae_no_motion, score, simulate, Scored};
+use super::score::{nmae_no_motion, run_nmae, score, simulate, Scored};
 use crate::{
     AxisError, Candidate, Cause, DiagnoseError, DiagnoseOptions, Evidence, FinalModel, Finding,
     HeldoutSimulation, Report, RunSimulation, Verdict,
@@ -101,7 +101,7 @@ pub fn diagnose_drive(
             .iter()
             .map(|r| {
                 simulate(est, r)
-                    .map(|s| nmae(&s, &r.run.x, th.quantum))
+                    .map(|s| run_nmae(&s, r, th.quantum))
                     .unwrap_or(f64::INFINITY)
             })
             .collect();
@@ -242,7 +242,7 @@ pub fn diagnose_drive(
             note.push_str("; ");
             note.push_str(&e);
         }
-        let (identifiable, overlap) = load_overlap(cause);
+        let (identifiable, overlap) = load_overlap(cause, &scored.est);
         if let Some(o) = overlap {
             note.push_str("; ");
             note.push_str(o);
@@ -322,11 +322,7 @@ pub fn diagnose_drive(
     let fit_nmae = |est: &Estimate| -> f64 {
         let v: Vec<f64> = fit
             .iter()
-            .filter_map(|r| {
-                simulate(est, r)
-                    .ok()
-                    .map(|s| nmae(&s, &r.run.x, th.quantum))
-            })
+            .filter_map(|r| simulate(est, r).ok().map(|s| run_nmae(&s, r, th.quantum)))
             .collect();
         if v.is_empty() {
             f64::INFINITY
@@ -582,6 +578,31 @@ fn physical(cause: Cause, est: &Estimate, before: &Estimate) -> (bool, Option<St
             }
         }
         Cause::DirectionAsymmetry => (true, None),
+        Cause::ForceOffset if est.structure.asymmetric => {
+            // With a dry level per direction a constant force o is exactly those levels
+            // shifted, moving or at rest: F = u + o against Fk+ / Fs+ is u against Fk+ - o /
+            // Fs+ - o, and against Fk- / Fs- it is u against Fk- + o / Fs- + o. The offset-free
+            // model with the shifted levels simulates every run identically, so the offset is
+            // identifiable only where that model does not exist: a shifted level below 0, the
+            // load alone moving the axis. (A fitted offset that simulates better than the
+            // baseline then says the baseline's estimate of the levels, inertia or viscous
+            // friction moved, not that a load was found: on the CICESE joint-1 ramps such an
+            // offset came and went with the sample rate.)
+            let (pos, neg) = (p.kinetic_pos - p.offset, p.kinetic_neg + p.offset);
+            if !p.offset.is_finite() {
+                (false, None)
+            } else if pos >= 0.0 && neg >= 0.0 {
+                (
+                    false,
+                    Some(format!(
+                        "force_offset not named: not identifiable with a dry level per direction; the fitted constant force {:.4} is exactly the levels shifted (kinetic +: {:.4} -> {pos:.4}, -: {:.4} -> {neg:.4}, both still >= 0), which simulate every run the same; a load would be identifiable only if it exceeded a level (the load alone moving the axis)",
+                        p.offset, p.kinetic_pos, p.kinetic_neg
+                    )),
+                )
+            } else {
+                (true, None)
+            }
+        }
         Cause::ForceOffset => (p.offset.is_finite(), None),
         Cause::InputDeadzone => (est.structure.deadband > before.structure.deadband, None),
         Cause::InputDelay => (est.structure.delay > 0, None),
@@ -598,8 +619,16 @@ fn physical(cause: Cause, est: &Estimate, before: &Estimate) -> (bool, Option<St
 /// asymmetry; at rest the two differ only if the load alone moves the axis (it exceeds the
 /// breakaway), or on data with a known load change. The closed-loop path states the same
 /// (`axis.rs`).
-fn load_overlap(cause: Cause) -> (bool, Option<&'static str>) {
+///
+/// With a dry level per direction already in the model, an offset is named only when it
+/// exceeds one of them ([`physical`]): then no shift of the levels reproduces it, and it is
+/// identifiable.
+fn load_overlap(cause: Cause, est: &Estimate) -> (bool, Option<&'static str>) {
     match cause {
+        Cause::ForceOffset if est.structure.asymmetric => (
+            true,
+            Some("identifiable apart from direction-dependent dry friction: the constant load exceeds the dry level of one direction (the load alone moves the axis), which no shift of the two levels (Fk+ by -o, Fk- by +o) reproduces"),
+        ),
         Cause::ForceOffset => (
             false,
             Some("not identifiable apart from direction-dependent dry friction: while sliding, a constant load o is exactly the dry levels shifted (Fk+ by -o, Fk- by +o); sliding data fix the two levels, not their split into a load and an asymmetry (runs where the load alone moves the axis, or with a known load change, would)"),
