@@ -157,3 +157,44 @@ fn cicese_joint2_sticks_and_slips_no_worse_than_standing_still() {
         m.ramps_still
     );
 }
+
+/// One direction only (joint 1's positive or negative ramps alone): a restoring force and a
+/// friction level that changes along the travel are one force while the axis moves one way,
+/// so a named `restoring_force` says it is not identifiable (the positive ramps alone give
+/// 145 N m/rad against gravity's 40); from both directions it is identifiable.
+#[test]
+fn one_direction_only_restoring_force_is_not_called_identifiable() {
+    use crane_diagnose::diagnose_dataset;
+    use crane_ident::data::load_dataset;
+    let Some(dir) = example("cicese_joint1") else {
+        return;
+    };
+    let ds = load_dataset(&dir).expect("example loads");
+    for (keep, one_way) in [("ramp_pos", true), ("ramp_neg", true), ("ramp_", false)] {
+        let mut sub = ds.clone();
+        sub.runs.retain(|r| r.name.contains(keep));
+        let r = diagnose_dataset(&sub, &DiagnoseOptions::default())
+            .unwrap_or_else(|e| panic!("{keep}: {e}"));
+        let f = r
+            .findings
+            .iter()
+            .find(|f| f.cause == "restoring_force")
+            .unwrap_or_else(|| panic!("{keep}: gravity not found: {:?}", r.findings));
+        println!(
+            "{keep}: identifiable {} k {:?}",
+            f.evidence.identifiable,
+            f.parameters.get("stiffness")
+        );
+        assert_eq!(
+            f.evidence.identifiable, !one_way,
+            "{keep}: {}",
+            f.evidence.note
+        );
+        assert_eq!(
+            f.evidence.note.contains("one direction only"),
+            one_way,
+            "{keep}: {}",
+            f.evidence.note
+        );
+    }
+}

@@ -158,13 +158,16 @@ pub fn diagnose_drive(
     let inertia_unknown = at_floor(&baseline.est);
     // one motion from rest in all the fitting data cannot separate inertia, friction and an
     // input effect (a delay, a dead band): each trades against the others on a single slide
-    let fit_motions: usize = fit
-        .iter()
-        .map(|p| {
-            super::prep::motions(&p.v, th.v_move, 1.0).len()
-                + super::prep::motions(&p.v, th.v_move, -1.0).len()
-        })
-        .sum();
+    let motions_dir = |sign: f64| -> usize {
+        fit.iter()
+            .map(|p| super::prep::motions(&p.v, th.v_move, sign).len())
+            .sum()
+    };
+    let (fit_pos, fit_neg) = (motions_dir(1.0), motions_dir(-1.0));
+    let fit_motions = fit_pos + fit_neg;
+    // moving one way only, a restoring force and a friction that changes along the travel
+    // are one force (below, at the finding)
+    let one_way = fit_pos == 0 || fit_neg == 0;
     let too_thin = fit_motions < MIN_FIT_MOTIONS;
     for _round in 0..DRIVE_CAUSES.len() {
         if too_thin {
@@ -242,10 +245,19 @@ pub fn diagnose_drive(
             note.push_str("; ");
             note.push_str(&e);
         }
-        let (identifiable, overlap) = load_overlap(cause, &scored.est);
+        let (mut identifiable, overlap) = load_overlap(cause, &scored.est);
         if let Some(o) = overlap {
             note.push_str("; ");
             note.push_str(o);
+        }
+        if cause == Cause::RestoringForce && one_way {
+            // A load keeps its sign when the motion reverses, friction does not: only runs in
+            // both directions tell them apart. One way, `k s(x)` and a dry level rising or
+            // falling along the travel (creep, wear, a tighter stretch of the screw) are the
+            // same force (CICESE joint 1's positive ramps alone: k 145 N m/rad, against 49
+            // from both directions and gravity's 40).
+            identifiable = false;
+            note.push_str("; not identifiable apart from position-dependent friction: the fitting runs move in one direction only, where a restoring force and a friction level that changes along the travel are the same force; runs in both directions would separate them (a load keeps its sign when the motion reverses, friction does not)");
         }
         findings.push(Finding {
             cause,
