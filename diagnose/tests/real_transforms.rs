@@ -7,13 +7,17 @@
 //! place, transformed, written through the documented format (CSV + `dataset.toml`) into a
 //! temporary directory and diagnosed end to end, like a user's log. Transforms and what must
 //! hold:
-//! - **clock**: `t + 1000 s`: the same report;
+//! - **clock**: Unix time stamps, `t + 1.7e9 s`: the same report;
 //! - **unknown gain**: the input in amperes, `u / 0.37`, no gain declared: the same causes,
 //!   and every effort parameter divided by 0.37 (the report is in input units);
 //! - **known gain**: the same amperes with `gain = 0.37` declared: the original numbers;
 //! - **mirror**: `x -> -x`, `u -> -u` (the encoder and the drive both wired the other way):
 //!   the same causes, positive and negative parameters swapped, the centre negated;
 //! - **encoder zero**: `x + 0.5 rad` (open loop): the same, the centre moved by 0.5;
+//! - **asynchronous layout**: each instant on two rows at one stamp, `x` on one and `u` on
+//!   the other (empty fields), merged back by the loader: the same report;
+//! - **milliseconds**, **thousandths**: stamps in ms (`time_unit`), positions in mm or mrad
+//!   (`position_scale = 0.001`): the same report;
 //! - **rest**: 20 s at rest before each run (open loop: a logger started before the test):
 //!   the same report;
 //! - **jitter** (asynchronous stamps, resampled by the loader) and **decimate** (half the
@@ -45,6 +49,13 @@ enum Transform {
     Jitter,
     /// Every second sample dropped (half the rate).
     Decimate,
+    /// An asynchronous log's layout: each instant written as two rows at one stamp, the
+    /// position on the first and the input on the second, the other field empty.
+    SplitRows,
+    /// Stamps in milliseconds (`time_unit = "ms"`).
+    Milliseconds,
+    /// Positions in thousandths (`position_scale = 0.001`: millimetres, milliradians).
+    Thousandths,
 }
 
 /// One run's columns: time, position, input, and for closed-loop runs the reference and the
@@ -60,6 +71,8 @@ struct Cols {
 
 const AMPS_PER_EFFORT: f64 = 1.0 / 0.37;
 const ZERO_SHIFT: f64 = 0.5;
+/// Unix time of 2023-11-14 [s]: loggers stamp with the wall clock.
+const UNIX_2023: f64 = 1.7e9;
 
 impl Transform {
     /// The transformed run (positions `x`, `r`; inputs `u`, `a`).
@@ -73,7 +86,7 @@ impl Transform {
         };
         match self {
             Transform::Clock => Cols {
-                t: c.t.iter().map(|t| t + 1000.0).collect(),
+                t: c.t.iter().map(|t| t + UNIX_2023).collect(),
                 ..c.clone()
             },
             Transform::UnknownGain | Transform::KnownGain => map(&|x| x, &|u| u * AMPS_PER_EFFORT),
@@ -122,6 +135,12 @@ impl Transform {
                     t,
                 }
             }
+            Transform::SplitRows => c.clone(),
+            Transform::Milliseconds => Cols {
+                t: c.t.iter().map(|t| t * 1e3).collect(),
+                ..c.clone()
+            },
+            Transform::Thousandths => map(&|x| x * 1e3, &|u| u),
             Transform::Decimate => {
                 let half = |v: &[f64]| -> Vec<f64> { v.iter().step_by(2).copied().collect() };
                 Cols {
@@ -181,6 +200,11 @@ fn write_transformed(src: &Path, tr: Transform, tag: &str) -> PathBuf {
     if let Some(g) = gain {
         writeln!(toml, "gain = {g:?}").unwrap();
     }
+    match tr {
+        Transform::Milliseconds => toml.push_str("time_unit = \"ms\"\n"),
+        Transform::Thousandths => toml.push_str("position_scale = 0.001\n"),
+        _ => {}
+    }
     if let Some(c) = &ds.spec.controller {
         // Re-declared in parallel form on the written columns `r` and `a`. The loop's output is
         // in input units: with the input divided by s, so are its gains and its saturation.
@@ -224,9 +248,20 @@ fn write_transformed(src: &Path, tr: Transform, tag: &str) -> PathBuf {
         let closed = !c.r.is_empty();
         let mut csv = String::from(if closed { "t,x,u,r,a\n" } else { "t,x,u\n" });
         for k in 0..c.t.len() {
-            write!(csv, "{:?},{:?},{:?}", c.t[k], c.x[k], c.u[k]).unwrap();
-            if closed {
-                write!(csv, ",{:?},{:?}", c.r[k], c.a[k]).unwrap();
+            if matches!(tr, Transform::SplitRows) {
+                write!(csv, "{:?},{:?},", c.t[k], c.x[k]).unwrap();
+                if closed {
+                    write!(csv, ",{:?},", c.r[k]).unwrap();
+                }
+                write!(csv, "\n{:?},,{:?}", c.t[k], c.u[k]).unwrap();
+                if closed {
+                    write!(csv, ",,{:?}", c.a[k]).unwrap();
+                }
+            } else {
+                write!(csv, "{:?},{:?},{:?}", c.t[k], c.x[k], c.u[k]).unwrap();
+                if closed {
+                    write!(csv, ",{:?},{:?}", c.r[k], c.a[k]).unwrap();
+                }
             }
             csv.push('\n');
         }
@@ -340,7 +375,10 @@ fn check(name: &str, data: &str, transforms: &[Transform]) {
     }
 }
 
-const OPEN_LOOP: [Transform; 6] = [
+const OPEN_LOOP: [Transform; 9] = [
+    Transform::SplitRows,
+    Transform::Milliseconds,
+    Transform::Thousandths,
     Transform::Clock,
     Transform::UnknownGain,
     Transform::KnownGain,
@@ -437,6 +475,9 @@ fn emps_diagnosis_is_invariant_under_clock_gain_and_sign() {
         "emps",
         "emps",
         &[
+            Transform::SplitRows,
+            Transform::Milliseconds,
+            Transform::Thousandths,
             Transform::Clock,
             Transform::UnknownGain,
             Transform::KnownGain,

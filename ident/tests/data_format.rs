@@ -143,8 +143,9 @@ fn errors_name_file_line_and_column() {
     let e = load_err("t,x,force\n0,0,0\n1,inf,0\n");
     assert!(matches!(e.problem, Problem::NotFinite(_)));
 
-    // time not increasing
-    let e = load_err("t,x,force\n0,0,0\n1,0,0\n1,0,0\n");
+    // time going back (a repeated stamp is an asynchronous log's: rows at one instant are
+    // merged if they agree, refused if not; `loader_rules.rs`)
+    let e = load_err("t,x,force\n0,0,0\n1,0,0\n0.5,0,0\n");
     assert_eq!(e.location.line, Some(4));
     assert_eq!(e.location.column, Some(("t".to_string(), 1)));
     assert!(matches!(e.problem, Problem::TimeNotIncreasing { .. }));

@@ -1,6 +1,7 @@
 //! The loader's rules for real logs, one test per rule: units, gains, declared controllers,
 //! irregular time stamps, held channels, gaps, BOM, header hints, ranges and clipped errors.
 
+use crane_ident::data::asynchronous::fill_blanks;
 use crane_ident::data::{
     load_dataset, parse_table, DataError, Dataset, Gain, InputUnit, LoadNote, PositionUnit,
     Problem, RunKind, Timing,
@@ -478,4 +479,152 @@ fn asynchronous_two_topic_log_is_resampled_and_its_slow_channel_noted() {
         "{:?}",
         a.notes
     );
+}
+
+/// An asynchronous log: one row per message, the other channel's field empty, the position
+/// and the input stamped apart (sometimes at one instant). Loaded as one complete row per
+/// instant, each empty field held at its column's last value, the leading row without an
+/// input dropped, and said.
+#[test]
+fn asynchronous_logs_with_empty_fields_are_merged_and_held() {
+    let mut s = String::from("t,x,u\n");
+    // x every 10 ms, u every 30 ms at 5 ms past; at t = 0.09 both at one stamp, two rows
+    let _ = writeln!(s, "0,0.0,");
+    for k in 1..20 {
+        let t = k as f64 * 0.01;
+        if k == 9 {
+            let _ = writeln!(s, "{t},{},", k as f64 * 1e-3);
+            let _ = writeln!(s, "{t},,{}", 7.0);
+            continue;
+        }
+        let _ = writeln!(s, "{t},{},", k as f64 * 1e-3);
+        if k % 3 == 0 {
+            let _ = writeln!(s, "{},,{}", t + 0.005, k as f64 / 3.0);
+        }
+    }
+    let ds = ok("", &s);
+    let a = ds.runs[0].axis().unwrap();
+    let LoadNote::Filled(f) = &a.notes[0] else {
+        panic!("{:?}", a.notes)
+    };
+    assert_eq!(f.merged, 1, "{f:?}");
+    // rows 0.00 .. 0.03 have no input yet: the first row with one is the one at 0.035
+    assert_eq!(f.dropped_leading, 4, "{f:?}");
+    assert!(
+        a.notes[0].to_string().contains("asynchronous log"),
+        "{}",
+        a.notes[0]
+    );
+    // every sample complete and finite, the input held between its messages
+    assert!(a.x.iter().chain(&a.u).all(|v| v.is_finite()));
+    assert_eq!(a.u[0], 1.0);
+    assert!(a.t[0] > 0.03 && a.t[0] < 0.04, "{}", a.t[0]);
+    // before resampling (the merged stamps are irregular): the instant 0.09 carries both of
+    // its rows' values, each empty field its column's last value
+    let table = parse_table(Path::new("async.csv"), &s).unwrap();
+    let (m, _) = fill_blanks(&table, 0, &[1, 2]).unwrap();
+    let k = m.columns[0].iter().position(|&t| t == 0.09).unwrap();
+    assert_eq!((m.columns[1][k], m.columns[2][k]), (9.0 * 1e-3, 7.0));
+    assert_eq!(m.lines[k], 13, "the merged row's line is its first row's");
+    let k = m.columns[0].iter().position(|&t| t == 0.065).unwrap();
+    assert_eq!((m.columns[1][k], m.columns[2][k]), (6.0 * 1e-3, 2.0));
+}
+
+#[test]
+fn asynchronous_rows_at_one_stamp_may_not_disagree() {
+    let (d, e) = fails("", "t,x,u\n0,0,0\n0.01,0.1,\n0.01,0.2,1\n0.02,0.3,1\n");
+    assert_eq!(e.location.file, d.join("run.csv"));
+    assert_eq!(e.location.line, Some(4), "{e}");
+    assert_eq!(e.location.column, Some(("x".to_string(), 2)), "{e}");
+    assert!(
+        matches!(e.problem, Problem::SameStampConflict { first_line: 3, .. }),
+        "{e}"
+    );
+}
+
+#[test]
+fn empty_fields_where_a_value_is_needed_are_refused_at_their_line_and_column() {
+    // a blank time stamp
+    let (_, e) = fails("", "t,x,u\n0,0,0\n,0.1,1\n0.02,0.3,1\n");
+    assert_eq!(e.location.line, Some(3), "{e}");
+    assert_eq!(e.location.column, Some(("t".to_string(), 1)), "{e}");
+    assert!(matches!(e.problem, Problem::BlankField(_)), "{e}");
+    // a used column never given a value
+    let (_, e) = fails("", "t,x,u\n0,0,\n0.01,0.1,\n0.02,0.3,\n");
+    assert_eq!(e.location.column, Some(("u".to_string(), 3)), "{e}");
+    assert!(e.to_string().contains("no value on any row"), "{e}");
+    // a crane run is never filled
+    let mut s = String::from("t,u_x,u_y,u_l,x,y,l,alpha,beta\n");
+    for k in 0..20 {
+        let ux = if k == 7 { String::new() } else { "0".into() };
+        let _ = writeln!(s, "{},{ux},0,0,0.1,0.1,0.3,1.5,0", k as f64 * 0.002);
+    }
+    let (_, e) = fails("payload_kg = 0.1\n", &s);
+    assert_eq!(e.location.line, Some(9), "{e}");
+    assert_eq!(e.location.column, Some(("u_x".to_string(), 2)), "{e}");
+    assert!(e.to_string().contains("empty field"), "{e}");
+    // "NaN" written out is still refused as not finite (an empty field is the only blank)
+    let (_, e) = fails("", "t,x,u\n0,0,0\n0.01,NaN,1\n0.02,0.3,1\n");
+    assert!(matches!(e.problem, Problem::NotFinite(_)), "{e}");
+}
+
+#[test]
+fn identical_duplicate_rows_are_merged_and_said() {
+    let ds = ok(
+        "",
+        "t,x,u\n0,0,0\n0.01,0.1,1\n0.01,0.1,1\n0.02,0.3,1\n0.03,0.4,1\n",
+    );
+    let a = ds.runs[0].axis().unwrap();
+    assert_eq!(a.t.len(), 4);
+    assert!(matches!(&a.notes[0], LoadNote::Filled(f) if f.merged == 1));
+}
+
+/// Stamps in milliseconds, microseconds, nanoseconds or Unix seconds; positions in
+/// millimetres or degrees through `position_scale` (the controller's reference with them).
+#[test]
+fn time_units_and_position_scale_convert_on_load() {
+    let mut ms = String::from("t,x,u\n");
+    let mut ns = String::from("t,x,u\n");
+    let mut epoch = String::from("t,x,u\n");
+    for k in 0..50 {
+        let t = k as f64 * 0.01;
+        let _ = writeln!(ms, "{},{},{}", k * 10, 10.0 * k as f64, 0.5 * t);
+        let _ = writeln!(ns, "{},{},{}", k * 10_000_000, 10.0 * k as f64, 0.5 * t);
+        let _ = writeln!(epoch, "{},{},{}", 1.7e9 + t, 10.0 * k as f64, 0.5 * t);
+    }
+    for (toml, csv) in [
+        ("time_unit = \"ms\"\nposition_scale = 0.001\n", &ms),
+        ("time_unit = \"ns\"\nposition_scale = 0.001\n", &ns),
+        ("position_scale = 0.001\n", &epoch),
+    ] {
+        let ds = ok(toml, csv);
+        let a = ds.runs[0].axis().unwrap();
+        assert!((a.dt() - 0.01).abs() < 1e-9, "{toml}: {}", a.dt());
+        assert!((a.x[10] - 0.1).abs() < 1e-12, "{toml}: {}", a.x[10]);
+        assert!(!a.resampled(), "{toml}");
+    }
+    // degrees on a rotary axis, the reference converted with x
+    let mut deg = String::from("t,x,u,r\n");
+    for k in 0..50 {
+        let _ = writeln!(deg, "{},{},0,{}", k as f64 * 0.01, k as f64, 90.0);
+    }
+    let ds = ok(
+        "position_unit = \"rad\"\ninput_unit = \"A\"\nposition_scale = 0.017453292519943295\n\
+         [controller]\nreference = \"r\"\nkp = 10.0\nkd = 1.0\n",
+        &deg,
+    );
+    let a = ds.runs[0].axis().unwrap();
+    assert!((a.x[45] - 45f64.to_radians()).abs() < 1e-12);
+    let r = &a.closed_loop.as_ref().unwrap().reference;
+    assert!((r[0] - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+    // bad values are refused at their key
+    let (_, e) = fails("time_unit = \"min\"\n", &axis_csv(10, 0.01));
+    assert!(
+        e.to_string().contains("time_unit") || e.to_string().contains("min"),
+        "{e}"
+    );
+    assert_eq!(e.location.line, Some(1), "{e}");
+    let (_, e) = fails("\nposition_scale = 0.0\n", &axis_csv(10, 0.01));
+    assert_eq!(e.location.line, Some(2), "{e}");
+    assert!(e.to_string().contains("position_scale"), "{e}");
 }

@@ -8,6 +8,10 @@ use super::error::{clip, err, DataError, MissingColumn, Problem};
 use std::collections::{BTreeMap, HashSet};
 use std::path::{Path, PathBuf};
 
+/// An empty field in a [`Table`] column. NaN written in a file is refused while parsing, so
+/// inside a table NaN always means "empty field".
+pub const BLANK: f64 = f64::NAN;
+
 /// A parsed CSV table: header names and numeric columns, with line numbers for errors.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Table {
@@ -24,7 +28,8 @@ pub struct Table {
 /// Parses CSV text: a UTF-8 byte-order mark is skipped, `#` lines are comments, blank lines
 /// are skipped, the first other line is the header, every other line a row of as many
 /// numeric fields. Every field is checked (numeric, finite), also in columns that will be
-/// ignored. Duplicate header names are found in linear time.
+/// ignored; an empty field is kept as [`BLANK`] (asynchronous logs), refused later where a
+/// value is needed. Duplicate header names are found in linear time.
 pub fn parse_table(file: &Path, text: &str) -> Result<Table, DataError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut header: Option<Vec<String>> = None;
@@ -64,6 +69,12 @@ pub fn parse_table(file: &Path, text: &str) -> Result<Table, DataError> {
                         continue;
                     };
                     let s = s.trim();
+                    if s.is_empty() {
+                        // a channel without a sample on this row (asynchronous logs): kept
+                        // as a blank, which only `asynchronous::fill_blanks` may fill
+                        col.push(BLANK);
+                        continue;
+                    }
                     let v: f64 = s.parse().map_err(|_| {
                         err(
                             file,
@@ -169,6 +180,19 @@ impl Table {
         )
     }
 
+    /// Multiplies column `name` (after `renames`) by `factor`, when the column exists (a
+    /// missing column is reported by [`Table::take`]); a unit conversion before the checks.
+    pub fn scale(&mut self, name: &str, renames: &BTreeMap<String, String>, factor: f64) {
+        if factor == 1.0 {
+            return;
+        }
+        if let Some(i) = self.find(name, renames) {
+            for v in &mut self.columns[i] {
+                *v *= factor;
+            }
+        }
+    }
+
     /// Column `name` (after `renames`), every value checked against `range` (min, max, unit).
     pub fn take(
         &self,
@@ -180,6 +204,18 @@ impl Table {
             .find(name, renames)
             .ok_or_else(|| self.missing(name, renames))?;
         let col = &self.columns[idx];
+        if let Some(k) = col.iter().position(|v| v.is_nan()) {
+            return Err(err(
+                &self.file,
+                Some(self.lines[k]),
+                Some((&self.header[idx], idx + 1)),
+                Problem::BlankField(
+                    "every row needs a value here (single-axis runs may leave x, u or force \
+                     empty on rows of an asynchronous log: they are then filled; crane runs \
+                     and time stamps may not)",
+                ),
+            ));
+        }
         if let Some((min, max, unit)) = range {
             for (k, &v) in col.iter().enumerate() {
                 if v < min || v > max {

@@ -157,6 +157,21 @@ pub enum Problem {
         /// Unit.
         unit: &'static str,
     },
+    /// An empty field where a value is needed: in a crane run, in a time stamp, or in a
+    /// column that never gets a value.
+    #[error("empty field: {0}")]
+    BlankField(&'static str),
+    /// Two rows with the same time stamp give different values in one column (an
+    /// asynchronous log's rows at one instant may only complete each other).
+    #[error("this row has the time stamp of line {first_line} but another value in this column ({this} against {first}): rows at one instant may only fill each other's empty fields")]
+    SameStampConflict {
+        /// Line of the first row with this stamp.
+        first_line: usize,
+        /// Its value.
+        first: f64,
+        /// This row's value.
+        this: f64,
+    },
     /// Fewer than two samples.
     #[error("fewer than two samples")]
     TooShort,

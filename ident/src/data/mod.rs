@@ -7,6 +7,7 @@
 //! - [`timebase`]: time-stamp checks, held channels, zero-order-hold resampling;
 //! - [`error`]: located errors ([`DataError`]: file, line, column).
 
+pub mod asynchronous;
 pub mod csv;
 pub mod error;
 pub mod spec;
@@ -20,7 +21,7 @@ pub use spec::{
     VelocityEstimate,
 };
 pub use timebase::{Irregularity, LoadNote, TimeBase};
-pub use units::{Gain, InputUnit, PositionUnit};
+pub use units::{Gain, InputUnit, PositionUnit, TimeUnit};
 
 use error::err;
 use std::collections::BTreeMap;
@@ -240,12 +241,16 @@ impl Dataset {
     }
 }
 
+/// Largest |time stamp| accepted [s]: Unix time in seconds (1.7e9 in 2024) until the year
+/// 2286.
+pub const T_MAX_S: f64 = 1e10;
+
 /// Checks a run's time stamps: the row index and problem become a located error.
 fn time_base(
     table: &Table,
     renames: &BTreeMap<String, String>,
 ) -> Result<(Vec<f64>, TimeBase), DataError> {
-    let t = table.take("t", renames, Some((-1e9, 1e9, "s")))?;
+    let t = table.take("t", renames, Some((-T_MAX_S, T_MAX_S, "s")))?;
     match timebase::check_time(&t, &table.lines) {
         Ok(tb) => Ok((t, tb)),
         Err((_, Problem::TooShort)) => Err(err(&table.file, None, None, Problem::TooShort)),
@@ -436,9 +441,12 @@ impl Table {
 /// Loads one run described by `spec` relative to `dir`, with the data set's defaults.
 pub fn load_run(dir: &Path, ds: &DatasetSpec, spec: &RunSpec) -> Result<Run, DataError> {
     let path = dir.join(&spec.file);
-    let table = read_table(&path)?;
+    let mut table = read_table(&path)?;
     let mut renames = ds.columns.clone();
     renames.extend(spec.columns.clone());
+    // units of the recorded columns, converted before any check (every rule and message is
+    // then in seconds and in `position_unit`)
+    table.scale("t", &renames, ds.time_unit.seconds());
     let (samples, payload) = if table.is_crane(&renames) {
         let payload = spec.payload_kg.or(ds.payload_kg).ok_or_else(|| {
             err(
@@ -454,8 +462,36 @@ pub fn load_run(dir: &Path, ds: &DatasetSpec, spec: &RunSpec) -> Result<Run, Dat
         })?;
         (Samples::Crane(crane_run(&table, &renames)?), payload)
     } else {
+        if let Some(k) = ds.position_scale {
+            table.scale("x", &renames, k);
+            if let Some(c) = &ds.controller {
+                table.scale(&c.reference, &BTreeMap::new(), k);
+            }
+        }
+        // an asynchronous log (empty fields, rows at one stamp): one complete row per instant
+        let mut filled = None;
+        if let Some(t) = table.find("t", &renames) {
+            let ident = BTreeMap::new();
+            let mut used: Vec<usize> = ["x", "u", "force"]
+                .iter()
+                .filter_map(|n| table.find(n, &renames))
+                .collect();
+            if let Some(c) = &ds.controller {
+                used.extend(table.find(&c.reference, &ident));
+                if let Some(a) = &c.added_input {
+                    used.extend(table.find(a, &ident));
+                }
+            }
+            let (t2, note) = asynchronous::fill_blanks(&table, t, &used)?;
+            table = t2;
+            filled = note;
+        }
+        let mut axis = axis_run(&table, &renames, ds, Some(spec))?;
+        if let Some(f) = filled {
+            axis.notes.insert(0, LoadNote::Filled(f));
+        }
         (
-            Samples::Axis(axis_run(&table, &renames, ds, Some(spec))?),
+            Samples::Axis(axis),
             spec.payload_kg.or(ds.payload_kg).unwrap_or(0.0),
         )
     };

@@ -1,7 +1,7 @@
 //! `dataset.toml`: the description of a data set, parsed and range-checked.
 
 use super::error::{clip_quoted, err, DataError, Problem};
-use super::units::{Gain, InputUnit, PositionUnit};
+use super::units::{Gain, InputUnit, PositionUnit, TimeUnit};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -330,9 +330,18 @@ pub struct DatasetSpec {
     /// single-axis runs).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub payload_kg: Option<f64>,
+    /// Unit of the time column of every run (default `s`): converted to seconds on load.
+    #[serde(default, skip_serializing_if = "TimeUnit::is_second")]
+    pub time_unit: TimeUnit,
     /// Unit of a single-axis position (default `m`).
     #[serde(default, skip_serializing_if = "PositionUnit::is_metre")]
     pub position_unit: PositionUnit,
+    /// Recorded single-axis positions (`x` and a controller's reference) times this are in
+    /// `position_unit`: 0.001 for millimetres, pi/180 = 0.017453292519943295 for degrees,
+    /// lead / counts per turn for raw encoder counts. Default 1; range
+    /// [`POSITION_SCALE_RANGE`]. Controller gains are per `position_unit`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position_scale: Option<f64>,
     /// Unit of a single-axis input `u` (default `V`; a `force` column is an effort).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub input_unit: Option<InputUnit>,
@@ -377,7 +386,9 @@ impl DatasetSpec {
         DatasetSpec {
             description: None,
             payload_kg: None,
+            time_unit: TimeUnit::Second,
             position_unit: PositionUnit::Metre,
+            position_scale: None,
             input_unit: None,
             gain_n_per_v: None,
             columns: BTreeMap::new(),
@@ -405,6 +416,10 @@ impl DatasetSpec {
         }
     }
 }
+
+/// Plausible range of `position_scale`: from nanometre (or nanoradian) counts to a scale of a
+/// million (positions logged in thousands of units).
+pub const POSITION_SCALE_RANGE: (f64, f64) = (1e-12, 1e6);
 
 /// Plausible ranges of the constants, `[min, max]`, and why.
 pub const PAYLOAD_RANGE_KG: (f64, f64) = (0.0, 1e4);
@@ -466,6 +481,14 @@ pub fn parse_spec(file: &Path, text: &str) -> Result<DatasetSpec, DataError> {
     };
     if let Some(g) = spec.gain_n_per_v {
         within(gain_key, g, Gain::RANGE, "(effort per input unit)")?;
+    }
+    if let Some(k) = spec.position_scale {
+        within(
+            "position_scale",
+            k,
+            POSITION_SCALE_RANGE,
+            "(position_unit per recorded unit)",
+        )?;
     }
     let effort = spec.position_unit.effort_unit();
     if let Some(u) = spec.input_unit {

@@ -75,6 +75,9 @@ pub enum LoadNote {
         /// Share of rows repeating the previous value.
         repeated_share: f64,
     },
+    /// An asynchronous log: rows at one stamp merged, empty fields held
+    /// ([`super::asynchronous`]).
+    Filled(super::asynchronous::Filled),
 }
 
 impl fmt::Display for LoadNote {
@@ -107,6 +110,7 @@ impl fmt::Display for LoadNote {
                  {rows_per_refresh} steps",
                 repeated_share * 100.0
             ),
+            LoadNote::Filled(what) => write!(f, "{what}"),
         }
     }
 }

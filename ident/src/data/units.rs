@@ -45,6 +45,43 @@ impl PositionUnit {
     }
 }
 
+/// Unit of the time column `t` of every run (`time_unit` in `dataset.toml`; default `s`).
+/// Loggers often stamp in milliseconds or microseconds; the loader converts to seconds before
+/// any check, so every rule on time steps and every error message is in seconds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum TimeUnit {
+    /// Second (the default).
+    #[default]
+    #[serde(rename = "s")]
+    Second,
+    /// Millisecond.
+    #[serde(rename = "ms")]
+    Millisecond,
+    /// Microsecond (`us`; `µs` accepted).
+    #[serde(rename = "us", alias = "µs")]
+    Microsecond,
+    /// Nanosecond (ROS and Linux clock stamps).
+    #[serde(rename = "ns")]
+    Nanosecond,
+}
+
+impl TimeUnit {
+    /// Seconds per unit.
+    pub fn seconds(self) -> f64 {
+        match self {
+            TimeUnit::Second => 1.0,
+            TimeUnit::Millisecond => 1e-3,
+            TimeUnit::Microsecond => 1e-6,
+            TimeUnit::Nanosecond => 1e-9,
+        }
+    }
+
+    /// `true` for seconds (the default, not written out).
+    pub fn is_second(&self) -> bool {
+        *self == TimeUnit::Second
+    }
+}
+
 /// Unit of the recorded input `u` of a single-axis run. Unknown names are refused by the
 /// loader with the list of these.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
