@@ -18,8 +18,9 @@
 //!   the other (empty fields), merged back by the loader: the same report;
 //! - **milliseconds**, **thousandths**: stamps in ms (`time_unit`), positions in mm or mrad
 //!   (`position_scale = 0.001`): the same report;
-//! - **rest**: 20 s at rest before each run (open loop: a logger started before the test):
-//!   the same report;
+//! - **rest**: 20 s at rest before each run (a logger started before the test): the same
+//!   report (closed loop: to 1e-4, the declared controller settles the simulated axis during
+//!   the rest by a hair);
 //! - **jitter** (asynchronous stamps, resampled by the loader) and **decimate** (half the
 //!   rate): not the same numbers, so see [`check_close`] for what must hold.
 //!
@@ -288,8 +289,15 @@ fn causes(r: &Report) -> BTreeSet<String> {
     r.findings.iter().map(|f| f.cause.to_string()).collect()
 }
 
-fn close(a: f64, b: f64, what: &str, tag: &str) {
-    let tol = 1e-6 * a.abs().max(b.abs()).max(1e-12);
+/// Relative agreement required of re-expressed data: rounding only.
+const SAME: f64 = 1e-6;
+/// Closed loop with a rest in front: the declared controller holds the simulated axis during
+/// the rest, which settles it by a hair (EMPS: held-out NMAE 0.531819 against 0.531833, 2.8e-5
+/// apart): the same report to this.
+const SAME_AFTER_SETTLING: f64 = 1e-4;
+
+fn close_to(a: f64, b: f64, rel: f64, what: &str, tag: &str) {
+    let tol = rel * a.abs().max(b.abs()).max(1e-12);
     assert!(
         (a - b).abs() <= tol,
         "{tag}: {what} {a} vs expected {b} (rel. {:.2e})",
@@ -323,6 +331,12 @@ fn check(name: &str, data: &str, transforms: &[Transform]) {
             Transform::UnknownGain => AMPS_PER_EFFORT / g0,
             _ => 1.0,
         };
+        let rel = if ds.spec.controller.is_some() && matches!(tr, Transform::Rest) {
+            SAME_AFTER_SETTLING
+        } else {
+            SAME
+        };
+        let close = |a: f64, b: f64, what: &str, tag: &str| close_to(a, b, rel, what, tag);
         if let (Some(h0), Some(h1)) = (&base.heldout_simulation, &r.heldout_simulation) {
             close(h1.nmae_before, h0.nmae_before, "held-out NMAE before", &tag);
             close(h1.nmae_after, h0.nmae_after, "held-out NMAE after", &tag);
@@ -470,7 +484,7 @@ fn cicese_joint2_diagnosis_is_invariant_under_clock_gain_sign_and_zero() {
 }
 
 #[test]
-fn emps_diagnosis_is_invariant_under_clock_gain_and_sign() {
+fn emps_diagnosis_is_invariant_under_clock_gain_sign_and_rest() {
     check(
         "emps",
         "emps",
@@ -482,6 +496,7 @@ fn emps_diagnosis_is_invariant_under_clock_gain_and_sign() {
             Transform::UnknownGain,
             Transform::KnownGain,
             Transform::Mirror,
+            Transform::Rest,
         ],
     );
 }
