@@ -628,3 +628,22 @@ fn time_units_and_position_scale_convert_on_load() {
     assert_eq!(e.location.line, Some(2), "{e}");
     assert!(e.to_string().contains("position_scale"), "{e}");
 }
+
+/// Files written by spreadsheets and DAQ software in other locales: tab-separated, or
+/// semicolon-separated with decimal commas. The separator is the header's.
+#[test]
+fn tab_and_semicolon_files_with_decimal_commas_read_as_the_comma_file() {
+    let comma = axis_csv(40, 0.01);
+    let tab = comma.replace(',', "\t");
+    let semi = comma.replace(',', ";").replace('.', ",");
+    let want = ok("", &comma);
+    for (what, csv) in [("tab", &tab), ("semicolon", &semi)] {
+        let got = ok("", csv);
+        let (a, b) = (want.runs[0].axis().unwrap(), got.runs[0].axis().unwrap());
+        assert_eq!((&a.t, &a.x, &a.u), (&b.t, &b.x, &b.u), "{what}");
+    }
+    // a decimal comma is only read with semicolons, and never twice in a field
+    let (_, e) = fails("", "t;x;u\n0;0;0\n0,01;0,1,2;1\n");
+    assert!(matches!(e.problem, Problem::NotNumeric(_)), "{e}");
+    assert_eq!(e.location.column, Some(("x".to_string(), 2)), "{e}");
+}

@@ -392,7 +392,12 @@ pub fn diagnose_drive(
         100.0 * super::prep::ACCEL_NOISE_FRACTION
     ));
     flags.extend(final_.est.flags.iter().map(Flag::to_string));
-    if !final_.est.structure.stiction {
+    // (with no first motion in either direction both levels are the sliding one, and the
+    // flags say so above)
+    let no_onsets = Dir::BOTH
+        .iter()
+        .all(|&dir| final_.est.flags.contains(&Flag::NoFirstMotion { dir }));
+    if !final_.est.structure.stiction && !no_onsets {
         flags.push(match final_.est.level {
             DryLevel::FirstMotion => "dry friction level measured where the axis leaves rest at the start of each fitting run (it simulates the fitting runs better than the sliding least squares)".to_string(),
             DryLevel::Sliding => "dry friction level from the sliding least squares (it simulates the fitting runs better than the level at first motion)".to_string(),

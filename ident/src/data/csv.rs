@@ -8,6 +8,54 @@ use super::error::{clip, err, DataError, MissingColumn, Problem};
 use std::collections::{BTreeMap, HashSet};
 use std::path::{Path, PathBuf};
 
+/// The field separator of a file, told by its header line: a comma when the header has one,
+/// else a tab, else a semicolon (spreadsheets in locales with a decimal comma write
+/// `0,5;1,25`: with semicolons, a decimal comma is read as a point).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Delimiter {
+    /// `,` (the format's own).
+    Comma,
+    /// A tab.
+    Tab,
+    /// `;`, numbers with a decimal point or a decimal comma.
+    Semicolon,
+}
+
+impl Delimiter {
+    /// The separator of the file whose header line is `header`.
+    pub fn of_header(header: &str) -> Delimiter {
+        if header.contains(',') {
+            Delimiter::Comma
+        } else if header.contains('\t') {
+            Delimiter::Tab
+        } else if header.contains(';') {
+            Delimiter::Semicolon
+        } else {
+            Delimiter::Comma
+        }
+    }
+
+    /// The separator character.
+    pub fn char(self) -> char {
+        match self {
+            Delimiter::Comma => ',',
+            Delimiter::Tab => '\t',
+            Delimiter::Semicolon => ';',
+        }
+    }
+
+    /// A field as a number (`None` if it is not one).
+    pub fn number(self, field: &str) -> Option<f64> {
+        match (field.parse::<f64>(), self) {
+            (Ok(v), _) => Some(v),
+            (Err(_), Delimiter::Semicolon) if field.matches(',').count() == 1 => {
+                field.replace(',', ".").parse().ok()
+            }
+            _ => None,
+        }
+    }
+}
+
 /// An empty field in a [`Table`] column. NaN written in a file is refused while parsing, so
 /// inside a table NaN always means "empty field".
 pub const BLANK: f64 = f64::NAN;
@@ -26,8 +74,8 @@ pub struct Table {
 }
 
 /// Parses CSV text: a UTF-8 byte-order mark is skipped, `#` lines are comments, blank lines
-/// are skipped, the first other line is the header, every other line a row of as many
-/// numeric fields. Every field is checked (numeric, finite), also in columns that will be
+/// are skipped, the first other line is the header (its separator, `,`, tab or `;`, is the
+/// file's: [`Delimiter`]), every other line a row of as many numeric fields. Every field is checked (numeric, finite), also in columns that will be
 /// ignored; an empty field is kept as [`BLANK`] (asynchronous logs), refused later where a
 /// value is needed. Duplicate header names are found in linear time.
 pub fn parse_table(file: &Path, text: &str) -> Result<Table, DataError> {
@@ -35,6 +83,7 @@ pub fn parse_table(file: &Path, text: &str) -> Result<Table, DataError> {
     let mut header: Option<Vec<String>> = None;
     let mut columns: Vec<Vec<f64>> = Vec::new();
     let mut lines = Vec::new();
+    let mut delim = Delimiter::Comma;
     for (i, raw) in text.lines().enumerate() {
         let lineno = i + 1;
         let line = raw.trim();
@@ -43,8 +92,9 @@ pub fn parse_table(file: &Path, text: &str) -> Result<Table, DataError> {
         }
         match &header {
             None => {
+                delim = Delimiter::of_header(line);
                 let names: Vec<String> = line
-                    .split(',')
+                    .split(delim.char())
                     .map(|s| s.trim().trim_matches('"').trim().to_string())
                     .collect();
                 let mut seen = HashSet::with_capacity(names.len());
@@ -63,7 +113,7 @@ pub fn parse_table(file: &Path, text: &str) -> Result<Table, DataError> {
             }
             Some(h) => {
                 let mut count = 0;
-                for (k, s) in line.split(',').enumerate() {
+                for (k, s) in line.split(delim.char()).enumerate() {
                     count += 1;
                     let Some(col) = columns.get_mut(k) else {
                         continue;
@@ -75,7 +125,7 @@ pub fn parse_table(file: &Path, text: &str) -> Result<Table, DataError> {
                         col.push(BLANK);
                         continue;
                     }
-                    let v: f64 = s.parse().map_err(|_| {
+                    let v: f64 = delim.number(s).ok_or_else(|| {
                         err(
                             file,
                             Some(lineno),
