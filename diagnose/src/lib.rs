@@ -13,7 +13,7 @@
 //!
 //! ## Strangers' rigs
 //!
-//! `tests/strangers.rs` synthesises 14 plausible single-axis rigs with the project's drive
+//! `tests/strangers.rs` synthesises 15 plausible single-axis rigs with the project's drive
 //! model, writes each as a data set (CSV + `dataset.toml`) and diagnoses it end to end
 //! (`cargo test -p crane-diagnose --test strangers -- --nocapture`, about 5 s). Before: the
 //! pipeline as built against EMPS and CICESE (commit `d62ac5e`); after: this version. NMAE is
@@ -36,6 +36,7 @@
 //! | rotary, encoder reversed | position counts against the input | `unexplained`, NMAE 2e5 % | error: "the recorded position moves against the input ... a sign is reversed" |
 //! | PD loop declared as `[controller]`, 1 kHz | nothing hidden | `input_delay` (1 sample) + dead band | `none` (and on 9 further input draws, which named a cause on 4 before the bootstrap rule) |
 //! | the same PD loop, the drive 3 samples late | 3-sample input delay | (not tried) | `input_delay` on all 9 draws (4 samples: the zero-order hold's one on top; 5 on one draw) |
+//! | linear, N, 1 kHz, logged from 0.35 s into each run (mid-motion) | nothing hidden | (added later) simulated from rest: `unexplained`, 20.1 % | `none`; 0.20 %: held-out runs simulated from their first velocity when they start moving |
 //!
 //! What changed (each general, none tuned to a rig): the derivative window follows the
 //! data's noise and rate ([`drive::prep::window`]: 5 samples at 2 kHz made one encoder count

@@ -56,10 +56,13 @@ pub fn substeps(p: &DriveParams, dt: f64) -> usize {
 }
 
 /// Simulates a run: `u[i]` [input units] is applied over `[t_i, t_i + dt)`, the model starts
-/// at rest at `x0`; returns the simulated position at every sample time (`x[0] = x0`).
+/// at `x0` with velocity `v0` (0: at rest; a log that starts mid-motion starts the model
+/// moving, its mode following the sign); returns the simulated position at every sample time
+/// (`x[0] = x0`).
 pub fn simulate_drive(
     p: &DriveParams,
     x0: f64,
+    v0: f64,
     dt: f64,
     u: &[f64],
 ) -> Result<Vec<f64>, SimulateError> {
@@ -69,6 +72,10 @@ pub fn simulate_drive(
     let n = substeps(p, dt);
     let h = dt / n as f64;
     let mut d = Drive::<f64>::new(p, h, x0).map_err(|e| SimulateError::Params(e.to_string()))?;
+    if v0 != 0.0 {
+        d.set_state(x0, v0)
+            .map_err(|e| SimulateError::Params(e.to_string()))?;
+    }
     let mut out = Vec::with_capacity(u.len());
     if u.is_empty() {
         return Ok(out);
@@ -97,7 +104,7 @@ mod tests {
             breakaway_neg: 1.0,
             ..DriveParams::default()
         };
-        let x = simulate_drive(&p, 0.3, 0.01, &[0.5; 100]).unwrap();
+        let x = simulate_drive(&p, 0.3, 0.0, 0.01, &[0.5; 100]).unwrap();
         assert_eq!(x.len(), 100);
         assert!(x.iter().all(|&q| q == 0.3));
     }
@@ -106,13 +113,13 @@ mod tests {
     fn a_free_mass_follows_the_input() {
         // 1 kg, 1 N for 1 s: x = t^2 / 2
         let p = DriveParams::default();
-        let x = simulate_drive(&p, 0.0, 0.01, &[1.0; 101]).unwrap();
+        let x = simulate_drive(&p, 0.0, 0.0, 0.01, &[1.0; 101]).unwrap();
         assert!((x[100] - 0.5).abs() < 1e-9, "{}", x[100]);
     }
 
     #[test]
     fn bad_period_is_an_error() {
-        assert!(simulate_drive(&DriveParams::default(), 0.0, f64::NAN, &[0.0]).is_err());
-        assert!(simulate_drive(&DriveParams::default(), 0.0, 0.0, &[0.0]).is_err());
+        assert!(simulate_drive(&DriveParams::default(), 0.0, 0.0, f64::NAN, &[0.0]).is_err());
+        assert!(simulate_drive(&DriveParams::default(), 0.0, 0.0, 0.0, &[0.0]).is_err());
     }
 }

@@ -36,6 +36,10 @@ pub struct Prepared {
     pub a: Vec<f64>,
     /// Half window of the derivative estimates [samples].
     pub w: usize,
+    /// Velocity the simulations start from [m/s or rad/s]: the estimate at the first sample
+    /// when it exceeds the motion threshold (a log that starts mid-motion), else 0 (at rest,
+    /// exactly, so noise never starts a resting axis moving). Set by [`Prepared::set_start`].
+    pub v0: f64,
 }
 
 impl Prepared {
@@ -47,7 +51,21 @@ impl Prepared {
     /// Estimates velocity and acceleration of a run over `2 w + 1` samples (see [`window`]).
     pub fn with_window(run: DriveRun, w: usize) -> Prepared {
         let (v, a) = derivatives_over(&run.x, run.dt, w);
-        Prepared { run, v, a, w }
+        Prepared {
+            run,
+            v,
+            a,
+            w,
+            v0: 0.0,
+        }
+    }
+
+    /// Sets [`Prepared::v0`] from the motion threshold `v_move` [m/s or rad/s].
+    pub fn set_start(&mut self, v_move: f64) {
+        self.v0 = match self.v.first() {
+            Some(&v) if v.abs() > v_move => v,
+            _ => 0.0,
+        };
     }
 }
 

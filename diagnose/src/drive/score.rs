@@ -25,7 +25,8 @@ pub fn delayed_input(u: &[f64], s: &Structure) -> Vec<f64> {
     (0..u.len()).map(|i| u[i.saturating_sub(s.delay)]).collect()
 }
 
-/// Simulates a fitted model on a run (from the run's first position, at rest).
+/// Simulates a fitted model on a run, from the run's first position and its start velocity
+/// ([`Prepared::v0`]: 0 unless the log starts mid-motion).
 pub fn simulate(est: &Estimate, run: &Prepared) -> Result<Vec<f64>, SimulateError> {
     let mut p = est.params;
     p.deadband = est.structure.deadband;
@@ -33,6 +34,7 @@ pub fn simulate(est: &Estimate, run: &Prepared) -> Result<Vec<f64>, SimulateErro
     simulate_drive(
         &p,
         x0,
+        run.v0,
         run.run.dt,
         &delayed_input(&run.run.u, &est.structure),
     )

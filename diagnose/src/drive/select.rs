@@ -59,22 +59,32 @@ pub fn diagnose_drive(
     opts: &DiagnoseOptions,
 ) -> Result<Report, DiagnoseError> {
     let w = super::prep::window(&runs);
-    let prepared: Vec<Prepared> = runs
+    let mut prepared: Vec<Prepared> = runs
         .into_iter()
         .map(|r| Prepared::with_window(r, w))
         .collect();
-    let fit: Vec<&Prepared> = prepared.iter().filter(|p| !p.run.held_out).collect();
-    let held: Vec<&Prepared> = prepared.iter().filter(|p| p.run.held_out).collect();
-    if fit.is_empty() || held.is_empty() {
+    if !prepared.iter().any(|p| !p.run.held_out) || !prepared.iter().any(|p| p.run.held_out) {
         return Err(DiagnoseError::Input(
             "single-axis diagnosis needs at least one fitting and one held-out run".into(),
         ));
     }
-    let th = Thresholds::from_runs(&fit).ok_or_else(|| {
+    let th = Thresholds::from_runs(
+        &prepared
+            .iter()
+            .filter(|p| !p.run.held_out)
+            .collect::<Vec<_>>(),
+    )
+    .ok_or_else(|| {
         DiagnoseError::Input(
             "the fitting runs never move: friction and inertia are not identifiable".into(),
         )
     })?;
+    // a log that starts mid-motion is simulated from its first velocity
+    for p in &mut prepared {
+        p.set_start(th.v_move);
+    }
+    let fit: Vec<&Prepared> = prepared.iter().filter(|p| !p.run.held_out).collect();
+    let held: Vec<&Prepared> = prepared.iter().filter(|p| p.run.held_out).collect();
     // The restoring force's centre: the mean rest position the runs start from (a rig is
     // homed at its equilibrium; the centre is not separable from a force offset otherwise).
     let center =
