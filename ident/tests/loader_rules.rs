@@ -647,3 +647,30 @@ fn tab_and_semicolon_files_with_decimal_commas_read_as_the_comma_file() {
     assert!(matches!(e.problem, Problem::NotNumeric(_)), "{e}");
     assert_eq!(e.location.column, Some(("x".to_string(), 2)), "{e}");
 }
+
+/// A folder of logs without a `dataset.toml`: the error names the file and says what to
+/// write (and that an empty one takes every CSV in m and V), instead of a bare "not found".
+#[test]
+fn a_folder_of_logs_without_a_description_says_what_to_write() {
+    let d = temp_dir("nodesc");
+    std::fs::write(d.join("run.csv"), axis_csv(10, 0.01)).unwrap();
+    let e = load_dataset(&d).expect_err("no dataset.toml");
+    assert_eq!(e.location.file, d.join("dataset.toml"));
+    let m = e.to_string();
+    assert!(
+        m.contains("position_unit") && m.contains("DATA_FORMAT.md"),
+        "{m}"
+    );
+    // an empty one loads the CSV
+    std::fs::write(d.join("dataset.toml"), "").unwrap();
+    assert_eq!(
+        load_dataset(&d)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .runs
+            .len(),
+        1
+    );
+    // a path that is not a directory at all keeps the plain message
+    let e = load_dataset(&d.join("nowhere")).expect_err("no directory");
+    assert!(!e.to_string().contains("DATA_FORMAT.md"), "{e}");
+}

@@ -508,8 +508,19 @@ pub fn load_run(dir: &Path, ds: &DatasetSpec, spec: &RunSpec) -> Result<Run, Dat
 /// an error naming file, line and column.
 pub fn load_dataset(dir: &Path) -> Result<Dataset, DataError> {
     let spec_path = dir.join(DATASET_FILE);
-    let text = std::fs::read_to_string(&spec_path)
-        .map_err(|e| err(&spec_path, None, None, Problem::Io(e.to_string())))?;
+    let text = std::fs::read_to_string(&spec_path).map_err(|e| {
+        let why = if e.kind() == std::io::ErrorKind::NotFound && dir.is_dir() {
+            // a folder of logs without a description: say what to write
+            format!(
+                "{e}; a data set is a directory with a `{DATASET_FILE}` that says what the \
+                 columns are (`position_unit`, `input_unit`, `[columns]`, `[[runs]]`: see \
+                 ident/DATA_FORMAT.md); an empty one makes every *.csv a run in m and V"
+            )
+        } else {
+            e.to_string()
+        };
+        err(&spec_path, None, None, Problem::Io(why))
+    })?;
     let mut spec = parse_spec(&spec_path, &text)?;
     if spec.runs.is_empty() {
         let mut files: Vec<String> = std::fs::read_dir(dir)
