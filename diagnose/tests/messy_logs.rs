@@ -104,8 +104,12 @@ fn record(
         .collect()
 }
 
+/// A fresh directory per call: tests run in parallel, and two of them may diagnose the same
+/// rig under the same name (one removing the directory while the other reads it).
 fn tmp(name: &str) -> PathBuf {
-    std::env::temp_dir().join(format!("crane_messy_{}_{name}", std::process::id()))
+    static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let k = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    std::env::temp_dir().join(format!("crane_messy_{}_{k}_{name}", std::process::id()))
 }
 
 /// Writes the runs (time stamps from 0 at each run's own rate) with this `dataset.toml`
@@ -522,9 +526,20 @@ fn a_vertical_axis_one_direction_per_run() {
     );
 }
 
-/// The coarse-encoder rigs; `names_causes`: a named cause fails (else only the parameters
-/// and a report are judged).
-fn coarse_encoder(names_causes: bool) {
+/// A coarse encoder on a slow axis logged fast: slides of 0.5-1 m/s at 1 kHz, so one count
+/// (0.5-2 mm) is 0.5 to 4 samples' travel, 25-100 counts a slide. Before: with a count of 1 or
+/// 2 mm no sample was "moving" (the motion threshold was floored at one count per sample) and
+/// the diagnosis refused the data ("0 sliding samples"). Now a report with physical
+/// parameters, the inertia within 1.5x (0.52, 0.54, 0.58 against 0.5).
+///
+/// Known limit (not asserted; see the crate docs' "Messy logs"): nothing is hidden, yet with
+/// the 1 mm count the baseline simulates the held-out runs at 5.67 %, just above the `none`
+/// level (the parameters from derivatives over 55 samples of a quantised position, J 0.536,
+/// D 1.9-2.3 against 0.5, 2.0, drift in the open-loop simulation), and a stand-in is named:
+/// `input_saturation` at 7.5 N (5.67 -> 3.35 %; before that candidate, a 1-sample
+/// `input_delay`, 5.67 -> 4.16 %). An output-error refinement of the baseline would be the fix.
+#[test]
+fn a_coarse_encoder() {
     let truth = carriage(0.5, 3.0, 3.0, 2.0);
     let dt = 1e-3;
     let mut failures = Vec::new();
@@ -548,9 +563,7 @@ fn coarse_encoder(names_causes: bool) {
         match out {
             Ok(r) => {
                 let mut bad = judge_plain(&truth, &r, 1.5);
-                if !names_causes {
-                    bad.retain(|b| !b.starts_with("invented"));
-                }
+                bad.retain(|b| !b.starts_with("invented"));
                 if !bad.is_empty() {
                     failures.push(format!("{name}: {bad:?}"));
                 }
@@ -561,38 +574,17 @@ fn coarse_encoder(names_causes: bool) {
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
-/// A coarse encoder on a slow axis logged fast: slides of 0.5-1 m/s at 1 kHz, so one count
-/// (0.5-2 mm) is 0.5 to 4 samples' travel, 25-100 counts a slide. Before: with a count of 1 or
-/// 2 mm no sample was "moving" (the motion threshold was floored at one count per sample) and
-/// the diagnosis refused the data ("0 sliding samples"). Now a report with physical
-/// parameters, the inertia within 1.5x (0.52, 0.54, 0.58 against 0.5).
-#[test]
-fn a_coarse_encoder() {
-    coarse_encoder(false);
-}
-
-/// Known limit, the same rigs: with the 1 mm count the baseline (nothing hidden) simulates the
-/// held-out runs at 5.7 %, just above the `none` level, and a 1-sample `input_delay` is named
-/// (5.7 -> 4.2 %): the parameters from derivatives over 55 samples of a quantised position
-/// (J 0.536, D 1.9-2.3 against 0.5, 2.0) drift in the open-loop simulation. An output-error
-/// refinement of the baseline would be the fix; not done.
-#[test]
-#[ignore = "known limit: a coarse encoder's parameter error names a 1-sample delay"]
-fn a_coarse_encoder_names_nothing() {
-    coarse_encoder(true);
-}
-
 /// The logger records the command, the amplifier limits the force to 12 N: the recorded input
-/// (8-20 N pulses) runs past the limit. No candidate models a saturation, so a cause named is
-/// a stand-in: the report must say the rest is unexplained, flag a grid-searched value at its
-/// grid edge, and keep the parameters physical.
+/// (8-20 N pulses) runs past the limit. Whatever is named, the parameters stay physical; a
+/// cause other than `input_saturation` is a stand-in: the report must say the rest is
+/// unexplained and flag a grid-searched value at its grid edge.
 #[test]
 fn an_input_past_the_amplifier_limit() {
     let r = saturated();
     let m = r.final_model.as_ref().unwrap();
     assert!(m.inertia > 0.0 && m.kinetic_pos >= 0.0 && m.kinetic_neg >= 0.0);
     assert!(m.viscous_pos >= 0.0 && m.viscous_neg >= 0.0);
-    if !r.findings.is_empty() {
+    if r.findings.iter().any(|f| f.cause != Cause::InputSaturation) {
         assert!(
             r.verdict_reason.contains("not explained"),
             "{}",
@@ -606,18 +598,88 @@ fn an_input_past_the_amplifier_limit() {
     }
 }
 
-/// Known limit, the same rig: `input_delay` (8 samples, grid edge) and `input_deadzone` are
-/// named for the saturation (held-out NMAE 42.3 -> 27.8 %, "the rest is not explained"); an
-/// input-saturation candidate would be the fix; not done.
+/// The same rig: the saturation is named, alone, at its level within 10 % (12 N), in the
+/// finding and the final model, with its unit. Before the `input_saturation` candidate:
+/// `input_delay` (8 samples, grid edge) and `input_deadzone` stood in (held-out NMAE 42.3 ->
+/// 27.8 %, "the rest is not explained").
 #[test]
-#[ignore = "known limit: no saturation candidate, a delay and a dead band stand in"]
-fn an_input_past_the_amplifier_limit_names_nothing() {
+fn an_input_past_the_amplifier_limit_names_the_saturation() {
     let r = saturated();
-    assert!(
-        r.findings.is_empty(),
-        "named {:?}",
-        r.findings.iter().map(|f| f.cause).collect::<Vec<_>>()
+    assert_eq!(
+        r.findings.iter().map(|f| f.cause).collect::<Vec<_>>(),
+        vec![Cause::InputSaturation],
+        "{}",
+        r.verdict_reason
     );
+    assert_eq!(r.verdict, Verdict::Found(Cause::InputSaturation));
+    let f = &r.findings[0];
+    let s = f.parameters["saturation"];
+    assert!((s / 12.0 - 1.0).abs() < 0.1, "saturation {s} N, truth 12 N");
+    assert!(
+        f.evidence.note.contains(&format!("{s:.4} N")),
+        "{}",
+        f.evidence.note
+    );
+    let m = r.final_model.as_ref().unwrap();
+    assert_eq!(m.saturation, Some(s));
+    assert_eq!(m.force_unit, "N");
+    assert!((m.inertia / 2.0 - 1.0).abs() < 0.1, "J {} of 2", m.inertia);
+    let h = r.heldout_simulation.as_ref().unwrap();
+    assert!(
+        h.nmae_after < 0.25 * h.nmae_before,
+        "held-out NMAE {} -> {}",
+        h.nmae_before,
+        h.nmae_after
+    );
+}
+
+/// Rigs with nothing saturated (the same pulses and carriage, the input applied as recorded)
+/// whose baseline is wrong for another reason, so every candidate is tried: a saturation is
+/// never named (and the first cause named is the truth's).
+#[test]
+fn nothing_saturated_names_no_saturation() {
+    let head = "position_unit = \"m\"\ninput_unit = \"N\"";
+    let dt = 1e-3;
+    // (a 6-sample delay or a breakaway of 7 N against 4 sliding leaves this baseline within the
+    // `none` level on these long pulses: no candidate is tried there)
+    let cases: [(&str, Cause); 2] = [
+        ("unsaturated_spring", Cause::RestoringForce),
+        ("unsaturated_deadband", Cause::InputDeadzone),
+    ];
+    let mut failures = Vec::new();
+    for (name, cause) in cases {
+        let mut rng = Rng::new(18);
+        let mut truth = carriage(2.0, 4.0, 4.0, 8.0);
+        match cause {
+            Cause::RestoringForce => {
+                truth.position_force = crane_model::drive::PositionForce::Spring {
+                    stiffness: 100.0,
+                    center: 0.0,
+                }
+            }
+            _ => truth.deadband = 3.0,
+        }
+        let logs: Vec<Log> = (0..4)
+            .map(|_| {
+                let u = pulses(&mut rng, dt, 4, 8.0, 20.0, 0.4, 0.3, false);
+                let x = record(&truth, dt, &u, 0.0, 1e-6, 0.0, &mut rng);
+                Log {
+                    dt,
+                    u,
+                    x,
+                    kind: "other",
+                }
+            })
+            .collect();
+        let (out, secs) = diagnose_logs(name, head, &logs);
+        println!("{}", line(name, secs, &out));
+        let r = out.expect("a report");
+        let named: Vec<Cause> = r.findings.iter().map(|f| f.cause).collect();
+        if named.contains(&Cause::InputSaturation) || named.first() != Some(&cause) {
+            failures.push(format!("{name}: named {named:?}, truth {cause}"));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
 }
 
 fn saturated() -> Report {
