@@ -21,6 +21,10 @@ pub enum Cause {
     InputDeadzone,
     /// An input delay.
     InputDelay,
+    /// The effort applied saturates: `clamp(u, -s, +s)` of the recorded input `u` (an
+    /// amplifier's current limit, a command recorded before the limiter). Single-axis
+    /// open-loop data; the level `s` is in the final model's `force_unit`.
+    InputSaturation,
     /// A payload heavier or lighter than declared (crane data).
     PayloadMass,
     /// A position-dependent restoring force: gravity on a joint, a spring, a cable
@@ -30,13 +34,14 @@ pub enum Cause {
 
 impl Cause {
     /// Every cause.
-    pub const ALL: [Cause; 8] = [
+    pub const ALL: [Cause; 9] = [
         Cause::LocalizedFriction,
         Cause::Stiction,
         Cause::DirectionAsymmetry,
         Cause::ForceOffset,
         Cause::InputDeadzone,
         Cause::InputDelay,
+        Cause::InputSaturation,
         Cause::PayloadMass,
         Cause::RestoringForce,
     ];
@@ -50,6 +55,7 @@ impl Cause {
             Cause::ForceOffset => "force_offset",
             Cause::InputDeadzone => "input_deadzone",
             Cause::InputDelay => "input_delay",
+            Cause::InputSaturation => "input_saturation",
             Cause::PayloadMass => "payload_mass",
             Cause::RestoringForce => "restoring_force",
         }
@@ -303,6 +309,10 @@ pub struct FinalModel {
     pub deadband: f64,
     /// Input delay [samples].
     pub delay_samples: usize,
+    /// Level at which the applied effort saturates, `clamp(u, -s, +s)` [force unit]; `null`
+    /// when the model has no saturation.
+    #[serde(default)]
+    pub saturation: Option<f64>,
     /// Scatter (standard deviation) of the breakaway levels at every rest-to-motion onset of
     /// the fitting runs, positive direction [force unit] (0 when unknown).
     pub breakaway_scatter_pos: f64,

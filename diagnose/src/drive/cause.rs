@@ -3,11 +3,12 @@
 use crate::Cause;
 
 /// Every cause tried on single-axis open-loop data, in the order they are tried.
-pub const DRIVE_CAUSES: [Cause; 6] = [
+pub const DRIVE_CAUSES: [Cause; 7] = [
     Cause::RestoringForce,
     Cause::Stiction,
     Cause::DirectionAsymmetry,
     Cause::ForceOffset,
     Cause::InputDeadzone,
+    Cause::InputSaturation,
     Cause::InputDelay,
 ];

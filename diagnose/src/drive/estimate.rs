@@ -3,7 +3,7 @@
 //!
 //! 1. Sliding least squares: on the samples where the axis clearly slides
 //!    (`|v| > v_slide`), `F = J a + k s(x) + Fk+ [v > 0] - Fk- [v < 0] + D+ v+ + D- v- (+ F0)`
-//!    with `F` the (delayed, dead-banded) input and `s(x)` the restoring shape; every
+//!    with `F` the (delayed, saturated, dead-banded) input and `s(x)` the restoring shape; every
 //!    coefficient is kept in its physical range by an active-set solve (`J` above a floor,
 //!    `k`, `Fk`, `D` >= 0) and a coefficient held at its bound is flagged.
 //! 2. Breakaway at first motion: per fitting run and direction, the applied force net of the
@@ -75,6 +75,9 @@ pub struct Structure {
     pub deadband: f64,
     /// Input delay [samples] (fixed, searched on a grid by the caller).
     pub delay: usize,
+    /// Input saturation level [input units]: the effort applied is `clamp(u, -s, +s)`;
+    /// `0`: no saturation (fixed, searched on a grid by the caller).
+    pub saturation: f64,
 }
 
 /// Something the estimator had to decide that the report must say.
@@ -219,10 +222,19 @@ pub fn restoring_shape(motion: Motion, x: f64, center: f64) -> f64 {
 }
 
 /// The input a structure applies at sample `i` of a run: delayed by whole samples (the first
-/// value held before the record starts) and dead-banded [input units].
+/// value held before the record starts), saturated and dead-banded [input units].
 pub fn applied_input(u: &[f64], i: usize, s: &Structure) -> f64 {
     let j = i.saturating_sub(s.delay);
-    deadband(u.get(j).copied().unwrap_or(0.0), s.deadband)
+    deadband(saturate(u.get(j).copied().unwrap_or(0.0), s), s.deadband)
+}
+
+/// `u` clamped to the structure's saturation level (`[-s, s]`; unchanged when `s` is 0).
+pub fn saturate(u: f64, s: &Structure) -> f64 {
+    if s.saturation > 0.0 {
+        u.clamp(-s.saturation, s.saturation)
+    } else {
+        u
+    }
 }
 
 /// Where a structure without stiction takes its one dry-friction level from (per direction).

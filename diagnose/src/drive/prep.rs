@@ -111,7 +111,12 @@ pub fn window(runs: &[DriveRun]) -> usize {
     if sigma.is_nan() || sigma <= 0.0 {
         return W;
     }
-    let shortest = runs.iter().map(|r| r.x.len()).min().unwrap_or(0);
+    // the window is bounded by the longest run, not the shortest: one short snippet (a 10 ms
+    // held-out run beside minutes of log) once capped every run's window at a quarter of its
+    // length (7 samples instead of 17 at 2 kHz), which put encoder noise in the
+    // accelerations, biased the inertia 32 % low and named a delay at the grid edge; a run
+    // shorter than the window gets the shortened end windows of `derivatives_over`
+    let longest = runs.iter().map(|r| r.x.len()).max().unwrap_or(0);
     let mut w = W;
     loop {
         // the quadratic fit's second-derivative weights: (k^2 - m) / S, m = w (w + 1) / 3
@@ -140,7 +145,7 @@ pub fn window(runs: &[DriveRun]) -> usize {
         let noise = noise / runs.len().max(1) as f64;
         let rms = if n > 0 { (ss / n as f64).sqrt() } else { 0.0 };
         let next = (w * 3).div_ceil(2);
-        if noise <= ACCEL_NOISE_FRACTION * rms || next > MAX_W || 4 * next + 2 > shortest {
+        if noise <= ACCEL_NOISE_FRACTION * rms || next > MAX_W || 4 * next + 2 > longest {
             return w;
         }
         w = next;
@@ -221,12 +226,28 @@ pub struct Thresholds {
     /// Largest |velocity| in the fitting runs [m/s or rad/s].
     pub v_peak: f64,
     /// Above it a sample counts as moving (first motion, stick/slip marks): 2 % of `v_peak`,
-    /// at least one position quantum per sample.
+    /// at least [`count_velocity`] (twice the velocity one encoder count makes).
     pub v_move: f64,
     /// Above it a sample counts as sliding for the least squares: 10 % of `v_peak`.
     pub v_slide: f64,
     /// Position resolution: the smallest non-zero step between samples [m or rad].
     pub quantum: f64,
+}
+
+/// The motion threshold's floor for an encoder of step `quantum` [m or rad] sampled every
+/// `dt` [s] with derivatives over `2 w + 1` samples [m/s or rad/s]: twice the largest
+/// velocity estimate one isolated count makes, `2 * 3 q / (2 (2 w + 1) dt)` (the local fit's
+/// velocity weights are `k / sum k^2`; a step of `q` after the centre sums them over
+/// `k = 1..w`: `q w (w + 1) / 2 / (w (w + 1) (2 w + 1) / 3) / dt`), so an encoder flicker is
+/// never motion. It was one count per sample, `q / dt`: a slow axis logged fast with a coarse
+/// encoder (a 2 mm count at 1 kHz, slides of 0.5-1 m/s, 25 counts each) then never "moved"
+/// and the diagnosis refused the data ("0 sliding samples"), although the smoothed velocity
+/// resolves a fraction of a count per sample.
+pub fn count_velocity(quantum: f64, dt: f64, w: usize) -> f64 {
+    if dt.is_nan() || dt <= 0.0 {
+        return f64::INFINITY;
+    }
+    3.0 * quantum / ((2 * w.max(1) + 1) as f64 * dt)
 }
 
 /// Fraction of the peak velocity above which an axis moves.
@@ -246,11 +267,14 @@ impl Thresholds {
             .flat_map(|p| p.run.x.windows(2).map(|w| (w[1] - w[0]).abs()))
             .filter(|d| *d > 0.0)
             .fold(f64::INFINITY, f64::min);
-        let dt = fit.iter().map(|p| p.run.dt).fold(f64::INFINITY, f64::min);
-        if v_peak.is_nan() || v_peak <= 0.0 || !quantum.is_finite() || !dt.is_finite() {
+        let floor = fit
+            .iter()
+            .map(|p| count_velocity(quantum, p.run.dt, p.w))
+            .fold(0.0f64, f64::max);
+        if v_peak.is_nan() || v_peak <= 0.0 || !quantum.is_finite() || !floor.is_finite() {
             return None;
         }
-        let v_move = (MOVE_FRACTION * v_peak).max(quantum / dt);
+        let v_move = (MOVE_FRACTION * v_peak).max(floor);
         let v_slide = (SLIDE_FRACTION * v_peak).max(v_move);
         Some(Thresholds {
             v_peak,

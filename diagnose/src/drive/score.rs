@@ -20,9 +20,12 @@ pub struct Scored {
 }
 
 /// The recorded input as the structure applies it: shifted by the delay in whole samples
-/// (the first value held before the record starts). The dead band is applied by the model.
+/// (the first value held before the record starts) and saturated
+/// ([`super::estimate::saturate`]). The dead band is applied by the model.
 pub fn delayed_input(u: &[f64], s: &Structure) -> Vec<f64> {
-    (0..u.len()).map(|i| u[i.saturating_sub(s.delay)]).collect()
+    (0..u.len())
+        .map(|i| super::estimate::saturate(u[i.saturating_sub(s.delay)], s))
+        .collect()
 }
 
 /// Simulates a fitted model on a run, from the run's first position and its start velocity
