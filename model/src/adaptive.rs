@@ -6,9 +6,11 @@
 //!
 //! - Inside a mode: the embedded Dormand-Prince 5(4) pair (FSAL, local extrapolation), the
 //!   RMS error norm over the ten components `(q, qd)` with `atol + rtol max(|y|, |y_new|)`,
-//!   the step controller `h min(5, max(0.2, 0.9 err^(-1/5)))` (no growth right after a
-//!   rejection), and the 4th-order continuous extension of MATLAB's `ntrp45` as dense output.
-//!   The same method as `tools/src/ode45.rs`, here on the hybrid law: a stopped axis has
+//!   the PI step controller of Hairer & Wanner's DOPRI5 after an accepted step,
+//!   `h min(5, max(0.2, 0.9 err^(-0.17) err_prev^0.04))`, and `h max(0.2, 0.9 err^(-1/5))`
+//!   after a rejection (no growth right after one), and the 4th-order continuous extension of
+//!   MATLAB's `ntrp45` as dense output. The same pair as `tools/src/ode45.rs`, here on the
+//!   hybrid law: a stopped axis has
 //!   `qd = 0` and `qdd = 0` exactly in every stage, so it stays exactly where it is, and a
 //!   state with every drive axis stopped and the swing at rest has a zero error estimate:
 //!   the steps then grow freely (up to [`Tolerances::hmax`]).
@@ -178,6 +180,8 @@ const BI: [[f64; 4]; 7] = [
     [0.0, -11.0 / 7.0, 11.0 / 3.0, -55.0 / 28.0],
     [0.0, 1.5, -4.0, 2.5],
 ];
+/// The PI controller's `beta` (the exponent of the last accepted error).
+const PI_BETA: f64 = 0.04;
 /// Dense-output samples per step for finding velocity and limit events.
 const EVENT_SAMPLES: usize = 8;
 /// Evaluations at most when locating an event (`locate`): past bisection's count for any
@@ -459,6 +463,8 @@ pub struct Adaptive {
     step_modes: [Mode; 3],
     stats: AdaptiveStats,
     rejected_last: bool,
+    /// Error norm of the last accepted step (at least 1e-4), for the PI controller.
+    err_prev: f64,
     /// The last accepted step [s] taken with a drive axis moving (infinite before one).
     h_moving: f64,
 }
@@ -492,6 +498,7 @@ impl Adaptive {
             step_modes: modes0,
             stats: AdaptiveStats::default(),
             rejected_last: false,
+            err_prev: 1e-4,
             h_moving: f64::INFINITY,
         })
     }
@@ -799,11 +806,15 @@ impl Adaptive {
                 self.rejected_last = true;
                 continue;
             }
+            // PI control (Gustafsson; Hairer & Wanner's DOPRI5: beta = 0.04): the last
+            // accepted error damps the growth.
             let fac = if err == 0.0 {
                 5.0
             } else {
-                (0.9 * libm::pow(err, -0.2)).clamp(0.2, 5.0)
+                (0.9 * libm::pow(err, -(0.2 - 0.75 * PI_BETA)) * libm::pow(self.err_prev, PI_BETA))
+                    .clamp(0.2, 5.0)
             };
+            self.err_prev = err.max(1e-4);
             let next = h * if self.rejected_last {
                 fac.min(1.0)
             } else {
