@@ -414,59 +414,7 @@ impl DensePoly {
         }
         unpack(&y)
     }
-
-    /// The states at the equally spaced times `t_first + i dt` into `out[i]`, all inside the
-    /// step (a grid): the same polynomial, evaluated by forward differences (4 additions per
-    /// component and point instead of 4 multiplications and 4 additions: a grid output
-    /// costs about a third less), restarted from an exact evaluation every [`GRID_CHUNK`]
-    /// points so that the rounding errors of the differences stay small
-    /// (within 1e-13 of them, tested against [`DensePoly::at`]).
-    pub fn fill(&self, t_first: f64, dt: f64, out: &mut [State<f64>]) {
-        let th_first = (t_first - self.t0) * self.inv_h;
-        let dth = dt * self.inv_h;
-        for (c, chunk) in out.chunks_mut(GRID_CHUNK).enumerate() {
-            let th0 = th_first + (c * GRID_CHUNK) as f64 * dth;
-            let [mut y, mut d1, mut d2, mut d3, d4] = self.differences(th0, dth);
-            for s in chunk.iter_mut() {
-                *s = unpack(&y);
-                for j in 0..10 {
-                    y[j] += d1[j];
-                    d1[j] += d2[j];
-                    d2[j] += d3[j];
-                    d3[j] += d4[j];
-                }
-            }
-        }
-    }
-
-    /// The forward-difference table at `th0` for steps of `dth`: the value, then the first to
-    /// fourth forward differences, per component.
-    fn differences(&self, th0: f64, dth: f64) -> [Y; 5] {
-        let [c0, c1, c2, c3] = &self.c;
-        let (d2, d3) = (dth * dth, dth * dth * dth);
-        let d4 = d2 * d2;
-        let mut t = [[0.0; 10]; 5];
-        for j in 0..10 {
-            let (a1, a2, a3, a4) = (c0[j], c1[j], c2[j], c3[j]);
-            // Taylor coefficients of the polynomial at `th0`, scaled to steps of `dth`.
-            let p0 = self.y0[j] + th0 * (a1 + th0 * (a2 + th0 * (a3 + th0 * a4)));
-            let b1 = dth * (a1 + th0 * (2.0 * a2 + th0 * (3.0 * a3 + th0 * (4.0 * a4))));
-            let b2 = d2 * (a2 + th0 * (3.0 * a3 + th0 * (6.0 * a4)));
-            let b3 = d3 * (a3 + th0 * (4.0 * a4));
-            let b4 = d4 * a4;
-            // Forward differences of `sum b_m i^m` at `i = 0`.
-            t[0][j] = p0;
-            t[1][j] = b1 + b2 + b3 + b4;
-            t[2][j] = 2.0 * b2 + 6.0 * b3 + 14.0 * b4;
-            t[3][j] = 6.0 * b3 + 36.0 * b4;
-            t[4][j] = 24.0 * b4;
-        }
-        t
-    }
 }
-
-/// Points between exact restarts of [`DensePoly::grid`]'s forward differences.
-pub const GRID_CHUNK: usize = 64;
 
 /// One Dormand-Prince trial step: stages, the 5th-order solution, its error vector, and the
 /// evaluations at the stages (for the breakaway guards).
@@ -952,52 +900,7 @@ pub fn energy(c: &Coeffs<f64>, y: &State<f64>) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::{locate, AdaptiveError, DensePoly};
-    use crate::state::State;
-
-    /// The forward differences of a grid agree with the polynomial evaluated point by point, to
-    /// `1e-13` of its terms, over long steps (many restarts) and short ones.
-    #[test]
-    fn a_grid_by_forward_differences_matches_the_polynomial() {
-        let mut c = [[0.0; 10]; 4];
-        let mut y0 = [0.0; 10];
-        for j in 0..10 {
-            let s = 1.0 + j as f64;
-            y0[j] = 0.3 * s - 1.1;
-            c[0][j] = 0.7 / s;
-            c[1][j] = -1.3 * s;
-            c[2][j] = 2.1 - 0.4 * s;
-            c[3][j] = -0.9 + 0.05 * s * s;
-        }
-        for (t0, h, n) in [(0.25, 0.5, 501usize), (3.0, 7.0, 7001), (1.0, 3e-3, 3)] {
-            let p = DensePoly {
-                t0,
-                inv_h: 1.0 / h,
-                th_end: 1.0,
-                y0,
-                c,
-            };
-            let dt = h / (n - 1) as f64;
-            let mut out = [State {
-                q: [0.0; 5],
-                qd: [0.0; 5],
-            }; 7001];
-            p.fill(t0, dt, &mut out[..n]);
-            for (i, s) in out[..n].iter().enumerate() {
-                let e = p.at(t0 + i as f64 * dt);
-                let (a, b) = (super::pack(s), super::pack(&e));
-                for j in 0..10 {
-                    let scale = y0[j].abs() + c.iter().map(|cp| cp[j].abs()).sum::<f64>();
-                    assert!(
-                        (a[j] - b[j]).abs() <= 1e-13 * scale,
-                        "point {i} of {n}, component {j}: {} vs {}",
-                        a[j],
-                        b[j]
-                    );
-                }
-            }
-        }
-    }
+    use super::{locate, AdaptiveError};
 
     /// Locates the root of `g` in `(lo, hi]` on a 1 s step to `tol`; returns the point and the
     /// number of evaluations.

@@ -5,12 +5,7 @@ use crate::cases::Case;
 use crate::error::{Error, Result};
 use crate::reference::Trajectory;
 use crane_model::adaptive::{Adaptive, AdaptiveStats, Tolerances};
-use crane_model::{Config, Crane, FrictionLaw, State};
-
-const ZERO: State<f64> = State {
-    q: [0.0; 5],
-    qd: [0.0; 5],
-};
+use crane_model::{Config, Crane, FrictionLaw};
 
 /// Tolerances for a case at relative tolerance `rtol` (`atol = rtol / 100`, events to
 /// `1e-3 rtol` seconds but at least 1e-12 s, the largest step a tenth of the input's period
@@ -92,10 +87,7 @@ pub fn hybrid_adaptive(case: &Case, tol: &Tolerances) -> Result<(Trajectory, Ada
         let after_reset = s.event.is_some() && tk(end) >= s.t1;
         let dense_end = if after_reset { end - 1 } else { end };
         if dense_end + 1 > next {
-            // By forward differences on the grid (`DensePoly::fill`), into the vector.
-            let len = tr.states.len();
-            tr.states.resize(len + dense_end + 1 - next, ZERO);
-            poly.fill(tk(next), case.sample, &mut tr.states[len..]);
+            tr.states.extend((next..=dense_end).map(|k| poly.at(tk(k))));
             tr.modes
                 .extend(core::iter::repeat_n(a.step_modes(), dense_end + 1 - next));
         }
