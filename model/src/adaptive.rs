@@ -6,9 +6,11 @@
 //!
 //! - Inside a mode: the embedded Dormand-Prince 5(4) pair (FSAL, local extrapolation), the
 //!   RMS error norm over the ten components `(q, qd)` with `atol + rtol max(|y|, |y_new|)`,
-//!   the step controller `h min(5, max(0.2, 0.9 err^(-1/5)))` (no growth right after a
-//!   rejection), and the 4th-order continuous extension of MATLAB's `ntrp45` as dense output.
-//!   The same method as `tools/src/ode45.rs`, here on the hybrid law: a stopped axis has
+//!   the PI step controller of Hairer & Wanner's DOPRI5 after an accepted step,
+//!   `h min(5, max(0.2, 0.9 err^(-0.17) err_prev^0.04))`, and `h max(0.2, 0.9 err^(-1/5))`
+//!   after a rejection (no growth right after one), and the 4th-order continuous extension of
+//!   MATLAB's `ntrp45` as dense output. The same pair as `tools/src/ode45.rs`, here on the
+//!   hybrid law: a stopped axis has
 //!   `qd = 0` and `qdd = 0` exactly in every stage, so it stays exactly where it is, and a
 //!   state with every drive axis stopped and the swing at rest has a zero error estimate:
 //!   the steps then grow freely (up to [`Tolerances::hmax`]).
@@ -178,6 +180,8 @@ const BI: [[f64; 4]; 7] = [
     [0.0, -11.0 / 7.0, 11.0 / 3.0, -55.0 / 28.0],
     [0.0, 1.5, -4.0, 2.5],
 ];
+/// The PI controller's `beta` (the exponent of the last accepted error).
+const PI_BETA: f64 = 0.04;
 /// Dense-output samples per step for finding velocity and limit events.
 const EVENT_SAMPLES: usize = 8;
 /// Evaluations at most when locating an event (`locate`): past bisection's count for any
@@ -234,17 +238,22 @@ fn dense_weights(th: f64) -> [f64; 7] {
 /// `f(th)` returns whether the event has happened at `th` and a signed value `g` of the
 /// event function, `g >= 0` where it has (the side is decided by the flag, so a value that
 /// rounds to the wrong sign cannot mislead the bracket). `f(lo)` must be false and `f(hi)`
-/// true, `g_lo <= 0 <= g_hi` their values.
+/// true, `g_lo <= 0 <= g_hi` their values. `guess`, if inside the bracket, is evaluated
+/// first (an estimate of the root from elsewhere).
 ///
 /// The ITP method (interpolate, truncate, project: Oliveira & Takahashi, ACM TOMS 47(1), 2020)
-/// with `k1 = 0.2 / (hi - lo)`, `k2 = 2`, `n0 = 1`: regula falsi on a smooth `g`
+/// with `k1 = 0.2 / (hi - lo)`, `k2 = 2`, `n0 = 1`, the truncation at least `tol / 2` (an
+/// interpolant closer than that to the root then lands past it, closing the bracket from both
+/// sides) and the Illinois weighting of an end kept twice: regula falsi on a smooth `g`
 /// (superlinear, typically 4-8 evaluations to 1e-10 s), never more than one evaluation over
-/// bisection's `ceil(log2((hi - lo) h / tol))` whatever `g` does, and at most [`MAX_LOCATE`].
+/// bisection's `ceil(log2((hi - lo) h / tol))` whatever `g` does (two with a `guess`), and at
+/// most [`MAX_LOCATE`].
 fn locate(
     h: f64,
     tol: f64,
     (mut lo, mut g_lo): (f64, f64),
     (mut hi, mut g_hi): (f64, f64),
+    guess: Option<f64>,
     mut f: impl FnMut(f64) -> Result<(bool, f64), AdaptiveError>,
 ) -> Result<f64, AdaptiveError> {
     let eps = 0.5 * tol / h;
@@ -257,10 +266,24 @@ fn locate(
     let n_half = libm::ceil(libm::log2(w0 / (2.0 * eps))).min(MAX_LOCATE as f64 - 1.0);
     // `eps 2^(n_max - j)`: the projection radius's budget, halved every iteration.
     let mut budget = eps * libm::exp2(n_half + 1.0);
+    let mut moved_hi: Option<bool> = None;
+    let mut guess = guess.filter(|x| *x > lo && *x < hi);
     for _ in 0..MAX_LOCATE {
         let w = hi - lo;
         if w <= 2.0 * eps {
             break;
+        }
+        if let Some(x) = guess.take() {
+            // The caller's estimate first (the budget is not spent on it).
+            let (hit, g) = f(x)?;
+            if hit {
+                hi = x;
+                g_hi = g.max(0.0);
+            } else {
+                lo = x;
+                g_lo = g.min(0.0);
+            }
+            continue;
         }
         let mid = lo + 0.5 * w;
         // Interpolation (regula falsi), where the values allow it; else the midpoint.
@@ -269,10 +292,12 @@ fn locate(
         } else {
             mid
         };
-        // Truncation towards the midpoint by `k1 w^2`, then projection into the ball of
-        // radius `r` around it that keeps the worst case of bisection.
+        // Truncation towards the midpoint by `k1 w^2`, but at least by `eps` (so that an
+        // interpolation already closer than `eps` to the root lands past it and closes the
+        // bracket from that side too), then projection into the ball of radius `r` around it
+        // that keeps the worst case of bisection.
         let sigma = if mid >= falsi { 1.0 } else { -1.0 };
-        let delta = k1 * w * w;
+        let delta = (k1 * w * w).max(eps);
         let trunc = if delta <= libm::fabs(mid - falsi) {
             falsi + sigma * delta
         } else {
@@ -286,13 +311,22 @@ fn locate(
         };
         budget *= 0.5;
         let (hit, g) = f(x)?;
+        // Illinois: an end kept twice in a row has its value halved for the interpolation,
+        // so that regula falsi does not creep towards the root from one side only.
         if hit {
             hi = x;
             g_hi = g.max(0.0);
+            if moved_hi == Some(true) {
+                g_lo *= 0.5;
+            }
         } else {
             lo = x;
             g_lo = g.min(0.0);
+            if moved_hi == Some(false) {
+                g_hi *= 0.5;
+            }
         }
+        moved_hi = Some(hit);
     }
     Ok(hi)
 }
@@ -407,6 +441,8 @@ pub struct Adaptive {
     step_modes: [Mode; 3],
     stats: AdaptiveStats,
     rejected_last: bool,
+    /// Error norm of the last accepted step (at least 1e-4), for the PI controller.
+    err_prev: f64,
     /// The last accepted step [s] taken with a drive axis moving (infinite before one).
     h_moving: f64,
 }
@@ -440,6 +476,7 @@ impl Adaptive {
             step_modes: modes0,
             stats: AdaptiveStats::default(),
             rejected_last: false,
+            err_prev: 1e-4,
             h_moving: f64::INFINITY,
         })
     }
@@ -647,15 +684,32 @@ impl Adaptive {
                 if let Some((s_lo, s_hi, dir, m_hi)) = found {
                     let (t0, c, modes) = (self.t, &self.c, &self.modes);
                     let m_lo = margin(&ax, q, tr.evals[s_lo].hold[i], dir);
+                    // On the trajectory the margin is known at both ends of the step (the
+                    // evaluations at its start and, FSAL, at its end). Where the guard holds
+                    // at the end, the crossing is located on the whole step, starting from
+                    // the stages' estimate (regula falsi between the two stages that bracket
+                    // it: stage states are off the trajectory, so the crossing may lie outside
+                    // them); else between those stages.
+                    let m_start = margin(&ax, q, tr.evals[0].hold[i], dir);
+                    let m_end = margin(&ax, q, tr.evals[6].hold[i], dir);
+                    let guess = (m_hi * C[s_lo] - m_lo * C[s_hi]) / (m_hi - m_lo);
                     let mut n = 0;
-                    let th = locate(h, self.tol.event, (C[s_lo], m_lo), (C[s_hi], m_hi), |th| {
-                        let st = unpack(&d.state(th));
-                        let us = saturate(u(t0 + th * h))?;
-                        n += 1;
-                        let e = eval(c, Law::Hybrid, &st, modes, &us)?;
-                        let m = margin(&ax, q, e.hold[i], dir);
-                        Ok((m > 0.0, m))
-                    })?;
+                    let th = {
+                        let mut g = |th: f64| {
+                            let st = unpack(&d.state(th));
+                            let us = saturate(u(t0 + th * h))?;
+                            n += 1;
+                            let e = eval(c, Law::Hybrid, &st, modes, &us)?;
+                            let m = margin(&ax, q, e.hold[i], dir);
+                            Ok((m > 0.0, m))
+                        };
+                        let tol = self.tol.event;
+                        if m_end > 0.0 && m_start <= 0.0 {
+                            locate(h, tol, (0.0, m_start), (1.0, m_end), Some(guess), &mut g)?
+                        } else {
+                            locate(h, tol, (C[s_lo], m_lo), (C[s_hi], m_hi), None, &mut g)?
+                        }
+                    };
                     self.stats.evals += n;
                     consider(th, EventKind::Breakaway, i);
                 }
@@ -686,7 +740,7 @@ impl Adaptive {
                     let th = n as f64 / EVENT_SAMPLES as f64;
                     let (hit, v) = g(th);
                     if hit {
-                        let th = locate(h, self.tol.event, prev, (th, v), |t| Ok(g(t)))?;
+                        let th = locate(h, self.tol.event, prev, (th, v), None, |t| Ok(g(t)))?;
                         consider(th, kind, i);
                         break;
                     }
@@ -747,11 +801,15 @@ impl Adaptive {
                 self.rejected_last = true;
                 continue;
             }
+            // PI control (Gustafsson; Hairer & Wanner's DOPRI5: beta = 0.04): the last
+            // accepted error damps the growth.
             let fac = if err == 0.0 {
                 5.0
             } else {
-                (0.9 * libm::pow(err, -0.2)).clamp(0.2, 5.0)
+                (0.9 * libm::pow(err, -(0.2 - 0.75 * PI_BETA)) * libm::pow(self.err_prev, PI_BETA))
+                    .clamp(0.2, 5.0)
             };
+            self.err_prev = err.max(1e-4);
             let next = h * if self.rejected_last {
                 fac.min(1.0)
             } else {
@@ -853,7 +911,7 @@ mod tests {
         tol: f64,
     ) -> Result<(f64, usize), AdaptiveError> {
         let mut n = 0;
-        let th = locate(1.0, tol, (lo, g(lo)), (hi, g(hi)), |x| {
+        let th = locate(1.0, tol, (lo, g(lo)), (hi, g(hi)), None, |x| {
             n += 1;
             let v = g(x);
             Ok((v >= 0.0, v))
@@ -875,6 +933,29 @@ mod tests {
     }
 
     #[test]
+    fn a_guess_is_tried_first_and_costs_at_most_one_evaluation() -> Result<(), AdaptiveError> {
+        let g = |x: f64| (x - 0.3) * (1.0 + 4.0 * x * x);
+        let (_, n_plain) = run(g, 0.0, 1.0, 1e-10)?;
+        for guess in [0.3 + 1e-9, 0.29, 0.5, 0.95] {
+            let mut first = None;
+            let mut n = 0;
+            let th = locate(1.0, 1e-10, (0.0, g(0.0)), (1.0, g(1.0)), Some(guess), |x| {
+                n += 1;
+                first.get_or_insert(x);
+                let v = g(x);
+                Ok((v >= 0.0, v))
+            })?;
+            assert_eq!(first, Some(guess));
+            assert!((th - 0.3).abs() <= 1e-10 && g(th) >= 0.0, "th = {th}");
+            assert!(
+                n <= n_plain + 1,
+                "guess {guess}: {n} vs {n_plain} evaluations"
+            );
+        }
+        Ok(())
+    }
+
+    #[test]
     fn a_jump_without_a_slope_still_converges_by_bisection() -> Result<(), AdaptiveError> {
         // Only the sign carries information: the safeguard must still shrink the bracket.
         let g = |x: f64| if x >= 0.6180339887 { 1.0 } else { -1e-9 };
@@ -892,7 +973,7 @@ mod tests {
     fn the_flag_decides_the_side_not_the_value() -> Result<(), AdaptiveError> {
         // A value that says "not yet" (0) where the flag says "happened" at exactly the root.
         let mut n = 0;
-        let th = locate(1.0, 1e-12, (0.0, -1.0), (1.0, 1.0), |x| {
+        let th = locate(1.0, 1e-12, (0.0, -1.0), (1.0, 1.0), None, |x| {
             n += 1;
             Ok((x >= 0.25, (x - 0.25).min(0.0)))
         })?;

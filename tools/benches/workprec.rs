@@ -42,6 +42,7 @@ fn bench(c: &mut Criterion) {
         let runs: Vec<(&str, Run)> = if one {
             vec![
                 ("hybrid_fixed_50ms", Run::Fixed(0.05)),
+                ("hybrid_adaptive_rtol1e-3", Run::Adaptive(1e-3)),
                 ("hybrid_adaptive_rtol1e-4", Run::Adaptive(1e-4)),
                 ("hybrid_adaptive_rtol1e-5", Run::Adaptive(1e-5)),
                 ("hybrid_adaptive_rtol1e-7_default", Run::Adaptive(1e-7)),
@@ -55,6 +56,7 @@ fn bench(c: &mut Criterion) {
         } else {
             vec![
                 ("hybrid_adaptive_rtol1e-3", Run::Adaptive(1e-3)),
+                ("hybrid_adaptive_rtol1e-5", Run::Adaptive(1e-5)),
                 ("hybrid_adaptive_rtol1e-6", Run::Adaptive(1e-6)),
                 ("hybrid_adaptive_rtol1e-7_default", Run::Adaptive(1e-7)),
                 ("tanh1e4_rosenbrock_rtol1e-4", Run::Rosenbrock(1e4, 1e-4)),

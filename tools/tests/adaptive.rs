@@ -162,6 +162,33 @@ fn events_are_located_to_tolerance() {
     assert!(velocity_events >= 4, "{velocity_events} velocity events");
 }
 
+/// The breakaway is located on the trajectory at loose tolerances too, where the steps are
+/// long and the stage states (where the guard is first seen) are far from it: case 2's first
+/// breakaway (the payload hangs at rest, so the margin is the net force alone) within the
+/// event tolerance of the exact time at every `rtol` of the sweep's loose end.
+#[test]
+fn breakaways_are_located_to_tolerance_at_loose_tolerances() {
+    let case = Case::two();
+    let t_star = (case.rope_threshold() / 12.0).asin() / (2.0 * std::f64::consts::PI * 0.5);
+    for rtol in [1e-3, 1e-4, 1e-5, 1e-6] {
+        let tol = tolerances(&case, rtol);
+        let cr = crane(&case, &case.params);
+        let mut a = Adaptive::new(cr.coeffs(), tol, 0.0, cr.state(), cr.modes()).unwrap();
+        let mut u = |t: f64| case.u_at(t);
+        let tb = loop {
+            let s = a.step(case.duration, &mut u).unwrap();
+            if let Some((EventKind::Breakaway, 2)) = s.event {
+                break s.t1;
+            }
+            assert!(a.time() < case.duration, "no breakaway at rtol {rtol}");
+        };
+        assert!(
+            (tb - t_star).abs() <= 2.0 * tol.event + 1e-12,
+            "rtol {rtol}: breakaway at {tb}, exact {t_star}"
+        );
+    }
+}
+
 /// A fixed-step run with steps longer than the grid, put on the grid: every grid point, the
 /// compared velocity equal to the interpolant the error is scored with, positions close to the
 /// reference, the samples themselves untouched.
