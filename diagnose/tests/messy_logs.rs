@@ -697,3 +697,32 @@ fn saturated() -> Report {
     println!("{}", line("input_past_limit", secs, &out));
     out.expect("a report")
 }
+
+/// Fitting runs whose only motion is one encoder count: the data's limit, said as an input
+/// error naming the sliding samples (it was reported as a model failure, `model: only 0
+/// sliding samples ...`).
+#[test]
+fn a_single_count_of_motion_is_the_datas_limit_not_the_models() {
+    let dt = 0.01;
+    let one_count = |kind| Log {
+        dt,
+        u: (0..400).map(|i| if i < 200 { 1.0 } else { 0.0 }).collect(),
+        x: (0..400).map(|i| if i < 200 { 0.0 } else { 1e-3 }).collect(),
+        kind,
+    };
+    let (out, secs) = diagnose_logs(
+        "one_count",
+        "position_unit = \"m\"\ninput_unit = \"N\"",
+        &[one_count("other"), one_count("validation")],
+    );
+    println!("{}", line("one_count_of_motion", secs, &out));
+    match out {
+        Err(DiagnoseError::Input(m)) => {
+            assert!(
+                m.contains("sliding samples") && m.contains("not identifiable"),
+                "{m}"
+            )
+        }
+        other => panic!("expected an input error, got {other:?}"),
+    }
+}

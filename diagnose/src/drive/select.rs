@@ -149,7 +149,10 @@ pub fn diagnose_drive(
         delay: 0,
         saturation: 0.0,
     };
-    let baseline = fit_and_score(base_s).map_err(DiagnoseError::Model)?;
+    // too few sliding samples or a singular least squares is the data's limit (an input
+    // error naming it), a failed simulation the model's
+    let baseline =
+        score_est(fit_only(base_s).map_err(DiagnoseError::Input)?).map_err(DiagnoseError::Model)?;
     let no_motion: Vec<f64> = held.iter().map(|r| nmae_no_motion(r, th.quantum)).collect();
     let no_motion_mean = no_motion.iter().sum::<f64>() / no_motion.len() as f64;
     let sel_no_motion =
