@@ -87,7 +87,8 @@ pub fn hybrid_adaptive(case: &Case, tol: &Tolerances) -> Result<(Trajectory, Ada
         let after_reset = s.event.is_some() && tk(end) >= s.t1;
         let dense_end = if after_reset { end - 1 } else { end };
         if dense_end + 1 > next {
-            tr.states.extend((next..=dense_end).map(|k| poly.at(tk(k))));
+            tr.states
+                .extend((next..dense_end + 1).map(|k| poly.at(tk(k))));
             tr.modes
                 .extend(core::iter::repeat_n(a.step_modes(), dense_end + 1 - next));
         }
