@@ -13,12 +13,20 @@
 //!   hybrid law: a stopped axis has
 //!   `qd = 0` and `qdd = 0` exactly in every stage, so it stays exactly where it is, and a
 //!   state with every drive axis stopped and the swing at rest has a zero error estimate:
-//!   the steps then grow freely (up to [`Tolerances::hmax`]).
+//!   the steps then grow freely (up to [`Tolerances::hmax`] and the guard bound below).
 //! - Events, on every accepted trial step: a moving axis's velocity reaching 0 and its
 //!   position reaching the limit it moves towards are found on the dense output (sampled at
 //!   eight points of the step, then the crossing located), a stopped axis's breakaway by its
 //!   margin at the stage evaluations, then the crossing of the margin evaluated at the dense
-//!   state (the ITP method: regula falsi with bisection's worst case). All
+//!   state (the ITP method: regula falsi with bisection's worst case). A breakaway guard is
+//!   seen only at the stages, so the next step is kept short enough that the holding force,
+//!   at the curvature it showed over the last step, cannot cross its level and come back
+//!   between two stages (`Adaptive::guard_step`; unbounded while the holding forces are
+//!   constant, so stuck phases under a constant load still take steps as long as they
+//!   like). Without it, case 1 (the trolleys stuck under a swinging payload) hid a crossing
+//!   inside 17 / 1 / 6 / 1 accepted steps at `rtol` 1e-2 / 1e-3 / 1e-4 / 1e-5 (the guard
+//!   checked at 63 points inside every step); with it, in none at 1e-3 .. 1e-7
+//!   (`tools/tests/adaptive.rs`). All
 //!   are located to [`Tolerances::event`] seconds. The state at the earliest event is taken
 //!   from the dense output (where the event was located), the reset applied (the
 //!   resets of `NUMERICS.md`: velocity `qd := 0`, limit end-stop impulse), every other
@@ -45,9 +53,9 @@ pub struct Tolerances {
     pub rtol: f64,
     /// Absolute tolerance, in the units of every component (m, rad, m/s, rad/s; > 0).
     pub atol: f64,
-    /// Largest step [s] (> 0; may be infinite). The breakaway guards are only sampled at the
-    /// stages of a step, so with a time-varying input this should resolve the input (a tenth
-    /// of its shortest period, say).
+    /// Largest step [s] (> 0; may be infinite). The error control follows a smooth input and
+    /// the guard bound keeps breakaways from hiding between the stages; an input with
+    /// features shorter than the steps would take (pulses, steps) needs this to resolve them.
     pub hmax: f64,
     /// Time tolerance [s] of the event location (> 0).
     pub event: f64,
@@ -454,11 +462,13 @@ pub struct Adaptive {
     step_modes: [Mode; 3],
     stats: AdaptiveStats,
     rejected_last: bool,
-    /// Error norm of the last accepted step (at least 1e-4), for the PI controller.
     /// `ln` of the last accepted error norm (floored at 1e-4), for the PI controller.
     ln_err_prev: f64,
     /// The last accepted step [s] taken with a drive axis moving (infinite before one).
     h_moving: f64,
+    /// The longest step [s] over which the stopped axes' breakaway guards, sampled at the
+    /// stages, cannot hide a crossing (from the last accepted step; see [`Adaptive::guard_step`]).
+    h_guard: f64,
 }
 
 impl Adaptive {
@@ -492,6 +502,7 @@ impl Adaptive {
             rejected_last: false,
             ln_err_prev: LN_ERR_FLOOR,
             h_moving: f64::INFINITY,
+            h_guard: f64::INFINITY,
         })
     }
 
@@ -658,6 +669,55 @@ impl Adaptive {
         Ok((100.0 * h0).min(h1).min(self.tol.hmax))
     }
 
+    /// The longest next step [s] over which the breakaway guards of the stopped axes, seen only
+    /// at the stages, cannot hide a crossing, from an accepted step of length `h` without an
+    /// event and the evaluations at its stages.
+    ///
+    /// A guard crossed and recrossed between two samples `D` apart needs the holding force to
+    /// bulge past its stage values by the distance `d` to the breakaway level, and a force of
+    /// curvature `K` bulges at most `K D^2 / 8` over such a gap. The stages' widest gap is half
+    /// the step (`c` 0.3 to 0.8), so a next step `H` with `K H^2 / 32 <= d / 4`, `H = sqrt(8 d
+    /// / K)`, leaves a fourfold margin for `K` and `d` changing over it. `K` is the largest
+    /// second divided difference of the holding force over the stage times; `d` the distance
+    /// at the step's end to the nearer level the axis could break away towards. A single
+    /// crossing needs no bound: it is seen at the next stage and located. Unbounded with every
+    /// axis moving or a holding force without curvature (an axis at rest under a constant
+    /// load), so the steps grow freely while the axes are stuck under any smooth input; never
+    /// below 16 event tolerances (an axis resting at its level with `d` near 0).
+    fn guard_step(&self, h: f64, evals: &[Eval<f64>; 7]) -> f64 {
+        // stage times in order (stage 5 and the end share `c` = 1: the end is on the trajectory)
+        const ORDER: [usize; 6] = [0, 1, 2, 3, 4, 6];
+        let mut bound = f64::INFINITY;
+        for i in 0..3 {
+            if self.modes[i] != Mode::Stopped || h <= 0.0 {
+                continue;
+            }
+            let hold = |s: usize| evals[s].hold[i];
+            let mut k: f64 = 0.0;
+            for w in ORDER.windows(3) {
+                let (ta, tb, tc) = (C[w[0]] * h, C[w[1]] * h, C[w[2]] * h);
+                let d1 = (hold(w[1]) - hold(w[0])) / (tb - ta);
+                let d2 = (hold(w[2]) - hold(w[1])) / (tc - tb);
+                k = k.max(libm::fabs(2.0 * (d2 - d1) / (tc - ta)));
+            }
+            if k.is_nan() || k == 0.0 {
+                continue;
+            }
+            let (ax, q, end) = (self.c.axes[i], self.y.q[i], hold(6));
+            let mut d = f64::INFINITY;
+            if q < ax.max {
+                d = d.min(-margin(&ax, q, end, Mode::Positive));
+            }
+            if q > ax.min {
+                d = d.min(-margin(&ax, q, end, Mode::Negative));
+            }
+            if d.is_finite() {
+                bound = bound.min(libm::sqrt(8.0 * d.max(0.0) / k));
+            }
+        }
+        bound.max(16.0 * self.tol.event)
+    }
+
     /// The earliest event in the trial step `d` (its whole length) with the evaluations at
     /// its stages (fraction of the step, kind, axis).
     fn find_event(
@@ -790,7 +850,7 @@ impl Adaptive {
         };
         loop {
             let remaining = t_end - self.t;
-            let mut h = self.h.min(self.tol.hmax);
+            let mut h = self.h.min(self.tol.hmax).min(self.h_guard);
             let last = h >= remaining;
             if last {
                 h = remaining;
@@ -848,6 +908,7 @@ impl Adaptive {
             let event = self.find_event(&d, &tr.evals, u)?;
             let Some((th, kind, i)) = event else {
                 self.dense = Some(d);
+                self.h_guard = self.guard_step(h, &tr.evals);
                 self.t = if last { t_end } else { self.t + h };
                 self.y = unpack(&tr.yn);
                 self.e1 = Some(tr.evals[6]);
