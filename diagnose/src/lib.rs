@@ -76,7 +76,7 @@
 //! |---|---|---|
 //! | 10 kHz x 120 s (1.2 M rows), nothing hidden / a 100 N/m spring | `none` in 1.2 s / `restoring_force` in 17 s (both runs of the diagnosis, load included) | the same causes; 1.9 s / 22 s with the saturation candidate tried (test profile, load 1.6; printed by the test, not asserted) |
 //! | one 10 ms held-out run beside 2 kHz runs | window 7 samples for every run (17 without it), J 1.35 of 2, `input_delay` 8 (grid edge) | window 17, `none`, J 1.99 |
-//! | coarse encoder, a count of 1-2 mm at 1 kHz (slides of 25-50 counts) | error "0 sliding samples" (motion floored at one count per sample) | a report, J 0.54 / 0.58 of 0.5 |
+//! | coarse encoder, a count of 1-2 mm at 1 kHz (slides of 25-50 counts) | error "0 sliding samples" (motion floored at one count per sample) | a report, J 0.52 / 0.54 / 0.58 of 0.5 |
 //! | runs that never move, fitted (every second run held out) | error "the fitting runs never move" | the same error, naming the moving held-out runs and `kind = "validation"` |
 //! | runs that never move, held out | `none`, 0.00 % | `none`, the reason says no held-out run moves |
 //! | vertical axis logged up, down, up, down | `unexplained`, "no candidate cuts it" (54.8 %) | `unexplained`, "not identifiable: the held-out runs move negative, which no fitting run does" + the fix; declared split: `force_offset` |
@@ -91,11 +91,22 @@
 //! dry level: CICESE joint 1 with jittered stamps named a level of 13.16 N m against a
 //! breakaway of 12.69, the stiffness falling from 49 to 16 N m/rad).
 //!
-//! Known limit: with a 1 mm count and nothing hidden (`a_coarse_encoder`) a stand-in is named:
-//! the baseline's derivative-based parameters (J 0.536, D 1.9-2.3 against 0.5, 2.0) drift in
-//! simulation, held-out NMAE 5.67 %, just above the `none` level, and `input_saturation` at
-//! 7.5 N cuts it to 3.35 % (before that candidate: a 1-sample `input_delay`, 5.67 -> 4.16 %).
-//! An output-error refinement of the baseline's parameters would be the fix; not done.
+//! Output-error refinement ([`drive::refine`]): least squares on differentiated positions
+//! are biased by a coarse encoder or a long derivative window, and a cause named against such
+//! a baseline may only stand in for the bias. Above the `none` level the baseline's inertia,
+//! viscous and dry levels are now also tuned on the fitting runs' simulation (golden section
+//! on each, within a factor 1.6, two sweeps); a first cause must cut the held-out error both
+//! ways, least squares against least squares and refined against refined; with no cause
+//! named the refined baseline is the final model (`none` within the `none` level). Measured:
+//! CICESE joint 1 and 2 unchanged (105.33 -> 10.75 %, 7.63 -> 5.83 %, `restoring_force`
+//! both; joint 2 refined both ways: 6.90 -> 6.21 %), the strangers' rigs and the hidden-effect
+//! sweep unchanged; the 1 mm encoder count's stand-in `input_saturation` is refused (refined:
+//! 2.04 -> 2.77 %, asserted in `a_coarse_encoder`).
+//!
+//! Known limit: with that 1 mm count and nothing hidden a stand-in is still named, now a
+//! 1-sample `input_delay` (least squares 5.67 -> 4.16 %, refined 2.11 -> 1.27 %): the
+//! open-loop path has no noise floor for a cut (the closed-loop path's block bootstrap),
+//! and a 40 % cut of a 2 % error passes the 5 % gain rule.
 //!
 //! ## The real logs, re-expressed
 //!

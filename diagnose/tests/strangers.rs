@@ -29,6 +29,8 @@ use crane_model::drive::{Drive, DriveParams, Motion, PositionForce};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+mod support;
+
 /// A PD position loop in parallel form `u = kp (r - q) - kd qdot`, `qdot` the backward
 /// difference of the measured (quantised) position [input units].
 #[derive(Clone, Copy)]
@@ -824,31 +826,8 @@ fn summary(r: &Report) -> String {
         )
         .unwrap();
     }
-    if let Some(h) = &r.heldout_simulation {
-        write!(
-            s,
-            "; held-out NMAE {:.2} -> {:.2} %",
-            h.nmae_before, h.nmae_after
-        )
-        .unwrap();
-    }
+    s.push_str(&support::model_line(r));
     if let Some(m) = &r.final_model {
-        write!(
-            s,
-            "; J {:.3e} Fk {:.3e}/{:.3e} Fs {:.3e}/{:.3e} D {:.3e}/{:.3e} k {:.3e} off {:.3e} db {:.3e} delay {}",
-            m.inertia,
-            m.kinetic_pos,
-            m.kinetic_neg,
-            m.breakaway_pos,
-            m.breakaway_neg,
-            m.viscous_pos,
-            m.viscous_neg,
-            m.stiffness,
-            m.offset,
-            m.deadband,
-            m.delay_samples
-        )
-        .unwrap();
         write!(
             s,
             "; fm {:.3?}/{:.3?}",

@@ -18,6 +18,7 @@ pub mod cause;
 pub mod estimate;
 pub mod plots;
 pub mod prep;
+pub mod refine;
 pub mod score;
 pub mod select;
 
