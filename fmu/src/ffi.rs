@@ -202,6 +202,18 @@ fn null_argument(fmu: &Fmu, what: &str) -> fmi2Status {
     }))
 }
 
+/// A get or set of a variable type this FMU has none of (`kind`: "Boolean", "String"):
+/// `fmi2OK` for no value reference, else an error naming the first one.
+fn no_variable_of(fmu: &Fmu, kind: &str, vr: &[fmi2ValueReference]) -> fmi2Status {
+    match vr.first() {
+        None => FMI2_OK,
+        Some(r) => fmu.report(Err(Failure {
+            status: Status::Error,
+            message: format!("no {kind} variable with value reference {r}"),
+        })),
+    }
+}
+
 fn unsupported(fmu: &Fmu, what: &str) -> fmi2Status {
     fmu.report(Err(Failure {
         status: Status::Error,
@@ -489,13 +501,7 @@ pub unsafe extern "C" fn fmi2GetBoolean(
             let (Some(vr), Some(_)) = (slice(vr, nvr), slice_mut(value, nvr)) else {
                 return null_argument(fmu, "fmi2GetBoolean");
             };
-            match vr.first() {
-                None => FMI2_OK,
-                Some(r) => fmu.report(Err(Failure {
-                    status: Status::Error,
-                    message: format!("no Boolean variable with value reference {r}"),
-                })),
-            }
+            no_variable_of(fmu, "Boolean", vr)
         })
     }
 }
@@ -518,13 +524,7 @@ pub unsafe extern "C" fn fmi2GetString(
             let (Some(vr), Some(_)) = (slice(vr, nvr), slice_mut(value, nvr)) else {
                 return null_argument(fmu, "fmi2GetString");
             };
-            match vr.first() {
-                None => FMI2_OK,
-                Some(r) => fmu.report(Err(Failure {
-                    status: Status::Error,
-                    message: format!("no String variable with value reference {r}"),
-                })),
-            }
+            no_variable_of(fmu, "String", vr)
         })
     }
 }
@@ -599,13 +599,7 @@ pub unsafe extern "C" fn fmi2SetBoolean(
             let (Some(vr), Some(_)) = (slice(vr, nvr), slice(value, nvr)) else {
                 return null_argument(fmu, "fmi2SetBoolean");
             };
-            match vr.first() {
-                None => FMI2_OK,
-                Some(r) => fmu.report(Err(Failure {
-                    status: Status::Error,
-                    message: format!("no Boolean variable with value reference {r}"),
-                })),
-            }
+            no_variable_of(fmu, "Boolean", vr)
         })
     }
 }
@@ -628,13 +622,7 @@ pub unsafe extern "C" fn fmi2SetString(
             let (Some(vr), Some(_)) = (slice(vr, nvr), slice(value, nvr)) else {
                 return null_argument(fmu, "fmi2SetString");
             };
-            match vr.first() {
-                None => FMI2_OK,
-                Some(r) => fmu.report(Err(Failure {
-                    status: Status::Error,
-                    message: format!("no String variable with value reference {r}"),
-                })),
-            }
+            no_variable_of(fmu, "String", vr)
         })
     }
 }

@@ -210,6 +210,20 @@ fn null_pointers_and_bad_arguments_are_errors_not_crashes() {
             fmi2GetBoolean(c, [0].as_ptr(), 1, [0].as_mut_ptr()),
             FMI2_ERROR
         );
+        // No Boolean or String variables: a reference is an error, none is fine.
+        assert_eq!(fmi2SetBoolean(c, [0].as_ptr(), 1, [0].as_ptr()), FMI2_ERROR);
+        assert_eq!(
+            fmi2GetString(c, [0].as_ptr(), 1, [null()].as_mut_ptr()),
+            FMI2_ERROR
+        );
+        assert_eq!(
+            fmi2SetString(c, [0].as_ptr(), 1, [null()].as_ptr()),
+            FMI2_ERROR
+        );
+        assert_eq!(
+            fmi2GetString(c, [0].as_ptr(), 0, [null()].as_mut_ptr()),
+            FMI2_OK
+        );
         assert_eq!(fmi2GetFMUstate(c, null_mut()), FMI2_ERROR);
         assert_eq!(fmi2DoStep(c, 0.0, 1e-3, 0), FMI2_ERROR); // not initialised
                                                              // Parameters read back as set; start values from Params::default().
