@@ -19,6 +19,21 @@ fn crane(case: &Case, params: &Params) -> Crane {
     .unwrap()
 }
 
+/// The time [s] of the rope's first breakaway in `case` under the adaptive integrator with
+/// `tol` (None if the run ends without one).
+fn first_rope_breakaway(case: &Case, tol: Tolerances) -> Option<f64> {
+    let cr = crane(case, &case.params);
+    let mut a = Adaptive::new(cr.coeffs(), tol, 0.0, cr.state(), cr.modes()).unwrap();
+    let mut u = |t: f64| case.u_at(t);
+    while a.time() < case.duration {
+        let s = a.step(case.duration, &mut u).unwrap();
+        if let Some((EventKind::Breakaway, 2)) = s.event {
+            return Some(s.t1);
+        }
+    }
+    None
+}
+
 /// Both cases converge to the 10 us fixed-step reference as the tolerance tightens, in far
 /// fewer steps than the fixed step needs.
 #[test]
@@ -172,16 +187,8 @@ fn breakaways_are_located_to_tolerance_at_loose_tolerances() {
     let t_star = (case.rope_threshold() / 12.0).asin() / (2.0 * std::f64::consts::PI * 0.5);
     for rtol in [1e-3, 1e-4, 1e-5, 1e-6] {
         let tol = tolerances(&case, rtol);
-        let cr = crane(&case, &case.params);
-        let mut a = Adaptive::new(cr.coeffs(), tol, 0.0, cr.state(), cr.modes()).unwrap();
-        let mut u = |t: f64| case.u_at(t);
-        let tb = loop {
-            let s = a.step(case.duration, &mut u).unwrap();
-            if let Some((EventKind::Breakaway, 2)) = s.event {
-                break s.t1;
-            }
-            assert!(a.time() < case.duration, "no breakaway at rtol {rtol}");
-        };
+        let tb = first_rope_breakaway(&case, tol)
+            .unwrap_or_else(|| panic!("no breakaway at rtol {rtol}"));
         assert!(
             (tb - t_star).abs() <= 2.0 * tol.event + 1e-12,
             "rtol {rtol}: breakaway at {tb}, exact {t_star}"
@@ -289,19 +296,8 @@ fn a_brief_excursion_past_the_breakaway_level_is_found() {
     for rtol in [1e-3, 1e-5, 1e-7] {
         let tol = tolerances(&case, rtol);
         assert!(tol.hmax.is_infinite());
-        let cr = crane(&case, &case.params);
-        let mut a = Adaptive::new(cr.coeffs(), tol, 0.0, cr.state(), cr.modes()).unwrap();
-        let mut u = |t: f64| case.u_at(t);
-        let tb = loop {
-            let s = a.step(case.duration, &mut u).unwrap();
-            if let Some((EventKind::Breakaway, 2)) = s.event {
-                break s.t1;
-            }
-            assert!(
-                a.time() < case.duration,
-                "rtol {rtol}: the rope never breaks away"
-            );
-        };
+        let tb = first_rope_breakaway(&case, tol)
+            .unwrap_or_else(|| panic!("rtol {rtol}: the rope never breaks away"));
         assert!(
             (tb - t_star).abs() <= 2.0 * tol.event + 1e-12,
             "rtol {rtol}: breakaway at {tb}, exact {t_star}"
