@@ -153,6 +153,15 @@ pub fn diagnose_drive(
     // error naming it), a failed simulation the model's
     let baseline =
         score_est(fit_only(base_s).map_err(DiagnoseError::Input)?).map_err(DiagnoseError::Model)?;
+    // a model whose inertia the sliding samples do not determine (too short a run, too few
+    // slides, or a missing position force) cannot carry a cause: the extension would only
+    // trade against its guesses; a cause is named only with the inertia determined
+    let at_floor = |est: &Estimate| {
+        est.flags
+            .iter()
+            .any(|f| matches!(f, Flag::InertiaAtFloor { .. }))
+    };
+    let inertia_unknown = at_floor(&baseline.est);
     // The baseline by output error: derivative-based least squares are biased by a coarse
     // encoder or a long derivative window, and the model then drifts in simulation although
     // its structure is right. Above NONE_LEVEL the baseline's inertia, viscous and dry friction
@@ -162,7 +171,8 @@ pub fn diagnose_drive(
     // with no cause named the refined baseline is the final model, and `none` within
     // NONE_LEVEL. The least-squares baseline stays the one the candidates extend and the one
     // the `none` rule before any candidate looks at.
-    let refined: Option<Scored> = (baseline.selection > NONE_LEVEL)
+    // (not refined with the inertia at its floor: the verdict says it is not identifiable)
+    let refined: Option<Scored> = (baseline.selection > NONE_LEVEL && !inertia_unknown)
         .then(|| super::refine::refine(&baseline.est, &fit_error))
         .flatten()
         .and_then(|(est, _)| score_est(est).ok())
@@ -193,15 +203,6 @@ pub fn diagnose_drive(
     let mut notes: BTreeMap<Cause, String> = BTreeMap::new();
     // per cause tried against the refined baseline: its refined held-out NMAE and cut
     let mut refined_cuts: BTreeMap<Cause, (f64, f64)> = BTreeMap::new();
-    // a model whose inertia the sliding samples do not determine (too short a run, too few
-    // slides, or a missing position force) cannot carry a cause: the extension would only
-    // trade against its guesses; a cause is named only with the inertia determined
-    let at_floor = |est: &Estimate| {
-        est.flags
-            .iter()
-            .any(|f| matches!(f, Flag::InertiaAtFloor { .. }))
-    };
-    let inertia_unknown = at_floor(&baseline.est);
     // one motion from rest in all the fitting data cannot separate inertia, friction and an
     // input effect (a delay, a dead band): each trades against the others on a single slide
     let motions_dir = |sign: f64| -> usize {
@@ -252,6 +253,7 @@ pub fn diagnose_drive(
             };
             let gain = 1.0 - scored.selection / current.selection;
             let mut supported = ok && gain >= MIN_GAIN;
+            let mut oe_note = None;
             // against the refined baseline, the candidate refined the same way: a cause must
             // cut the error whichever way the parameters are estimated (least squares against
             // least squares above, output error against output error here)
@@ -266,16 +268,13 @@ pub fn diagnose_drive(
                 refined_cuts.insert(cause, (oe, gain_oe));
                 supported = gain_oe >= MIN_GAIN;
                 if !supported {
-                    notes.insert(
-                        cause,
-                        format!(
+                    oe_note = Some(format!(
                             "{cause}: cuts the least-squares baseline's held-out NMAE by {:.0} % but, both refined by output error on the fitting runs, {:.2} % -> {:.2} % ({:.0} %): it stands in for the least squares' bias",
                             100.0 * gain,
                             r.selection,
                             oe,
                             100.0 * gain_oe
-                        ),
-                    );
+                    ));
                 }
             }
             candidates.push(Candidate {
@@ -292,8 +291,9 @@ pub fn diagnose_drive(
                 }
                 continue;
             }
-            if supported {
-                notes.remove(&cause);
+            notes.remove(&cause);
+            if let Some(n) = oe_note {
+                notes.insert(cause, n);
             }
             if supported
                 && best
@@ -382,7 +382,6 @@ pub fn diagnose_drive(
         used.push(cause);
         current = scored;
     }
-    // no cause, and the refined baseline simulates the held-out runs within NONE_LEVEL
     // no cause named: the final model is the baseline refined by output error (it simulates
     // the fitting runs better by construction), `none` if that is within NONE_LEVEL
     let refined_final = findings.is_empty() && unseen.is_none() && !too_thin && refined.is_some();
