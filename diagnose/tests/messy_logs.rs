@@ -24,6 +24,7 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 mod support;
+use support::pulses;
 
 /// One run as written: sample period [s], recorded input, recorded position, kind.
 struct Log {
@@ -47,39 +48,6 @@ fn carriage(inertia: f64, kin: f64, brk: f64, visc: f64) -> DriveParams {
         viscous_neg: visc,
         ..DriveParams::default()
     }
-}
-
-/// Trapezoidal pulses of alternating sign (`one_sign`: all of sign `+1`), amplitudes uniform in
-/// `[lo, hi]`, `dur` long (10 % ramps), `rest` of zero input after each, 0.2 s of rest first.
-#[allow(clippy::too_many_arguments)]
-fn pulses(
-    rng: &mut Rng,
-    dt: f64,
-    n: usize,
-    lo: f64,
-    hi: f64,
-    dur: f64,
-    rest: f64,
-    one_sign: bool,
-) -> Vec<f64> {
-    let mut u = vec![0.0; (0.2 / dt) as usize];
-    for k in 0..n {
-        let a = rng.range(lo, hi) * if one_sign || k % 2 == 0 { 1.0 } else { -1.0 };
-        let m = (dur / dt).round() as usize;
-        let r = (0.1 * m as f64).max(1.0) as usize;
-        for i in 0..m {
-            let s = if i < r {
-                i as f64 / r as f64
-            } else if i + r > m {
-                (m - i) as f64 / r as f64
-            } else {
-                1.0
-            };
-            u.push(a * s);
-        }
-        u.extend(std::iter::repeat_n(0.0, (rest / dt) as usize));
-    }
-    u
 }
 
 /// The truth simulated on `u` from `x0` at rest, measured with an encoder of step `q` (0:
@@ -222,7 +190,7 @@ fn long_logs(truth: &DriveParams, rng: &mut Rng) -> Vec<Log> {
         .map(|_| {
             let mut u = Vec::new();
             while (u.len() as f64) * dt < 60.0 {
-                u.extend(pulses(rng, dt, 4, 8.0, 20.0, 0.4, 0.3, false));
+                u.extend(pulses(rng, dt, 4, 8.0, 20.0, 0.4, 0.3, 0.0, false));
             }
             u.truncate((60.0 / dt) as usize);
             let x = record(truth, dt, &u, 0.0, 1e-6, 0.0, rng);
@@ -300,7 +268,7 @@ fn a_very_short_held_out_run() {
     let q = 1e-5;
     let mut logs: Vec<Log> = (0..4)
         .map(|_| {
-            let u = pulses(&mut rng, dt, 4, 8.0, 20.0, 0.4, 0.3, false);
+            let u = pulses(&mut rng, dt, 4, 8.0, 20.0, 0.4, 0.3, 0.0, false);
             let x = record(&truth, dt, &u, 0.0, q, 0.0, &mut rng);
             Log {
                 dt,
@@ -356,7 +324,7 @@ fn resting_runs_mixed_with_moving_runs() {
             .map(|k| {
                 let rests = (k % 2 == 0) == rest_first;
                 let (lo, hi) = if rests { (1.0, 3.0) } else { (8.0, 20.0) };
-                let u = pulses(&mut rng, dt, 4, lo, hi, 0.4, 0.3, false);
+                let u = pulses(&mut rng, dt, 4, lo, hi, 0.4, 0.3, 0.0, false);
                 let x = record(&truth, dt, &u, 0.0, 1e-6, 0.0, &mut rng);
                 Log {
                     dt,
@@ -408,7 +376,7 @@ fn runs_at_different_sample_rates() {
     let logs: Vec<Log> = (0..4)
         .map(|k| {
             let dt = if k < 2 { 1e-3 } else { 5e-3 };
-            let u = pulses(&mut rng, dt, 4, 8.0, 20.0, 0.4, 0.3, false);
+            let u = pulses(&mut rng, dt, 4, 8.0, 20.0, 0.4, 0.3, 0.0, false);
             let x = record(&truth, dt, &u, 0.0, 1e-6, 0.0, &mut rng);
             Log {
                 dt,
@@ -445,7 +413,7 @@ fn a_vertical_axis_one_direction_per_run() {
         .map(|k| {
             // the hold input 29.43 N; up: + 8..20 N, down: - 8..20 N
             let s = if k % 2 == 0 { 1.0 } else { -1.0 };
-            let u: Vec<f64> = pulses(&mut rng, dt, 4, 8.0, 20.0, 0.4, 0.3, true)
+            let u: Vec<f64> = pulses(&mut rng, dt, 4, 8.0, 20.0, 0.4, 0.3, 0.0, true)
                 .into_iter()
                 .map(|v| 29.43 + s * v)
                 .collect();
@@ -520,7 +488,7 @@ fn a_coarse_encoder() {
         let mut rng = Rng::new(16);
         let logs: Vec<Log> = (0..4)
             .map(|_| {
-                let u = pulses(&mut rng, dt, 8, 5.0, 8.0, 0.1, 0.2, false);
+                let u = pulses(&mut rng, dt, 8, 5.0, 8.0, 0.1, 0.2, 0.0, false);
                 let x = record(&truth, dt, &u, 0.0, q, 0.0, &mut rng);
                 Log {
                     dt,
@@ -638,7 +606,7 @@ fn nothing_saturated_names_no_saturation() {
         }
         let logs: Vec<Log> = (0..4)
             .map(|_| {
-                let u = pulses(&mut rng, dt, 4, 8.0, 20.0, 0.4, 0.3, false);
+                let u = pulses(&mut rng, dt, 4, 8.0, 20.0, 0.4, 0.3, 0.0, false);
                 let x = record(&truth, dt, &u, 0.0, 1e-6, 0.0, &mut rng);
                 Log {
                     dt,
@@ -665,7 +633,7 @@ fn saturated() -> Report {
     let dt = 1e-3;
     let logs: Vec<Log> = (0..4)
         .map(|_| {
-            let u = pulses(&mut rng, dt, 4, 8.0, 20.0, 0.4, 0.3, false);
+            let u = pulses(&mut rng, dt, 4, 8.0, 20.0, 0.4, 0.3, 0.0, false);
             let applied: Vec<f64> = u.iter().map(|v| v.clamp(-12.0, 12.0)).collect();
             let x = record(&truth, dt, &applied, 0.0, 1e-6, 0.0, &mut rng);
             Log {

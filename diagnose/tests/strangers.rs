@@ -30,6 +30,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 mod support;
+use support::pulses;
 
 /// A PD position loop in parallel form `u = kp (r - q) - kd qdot`, `qdot` the backward
 /// difference of the measured (quantised) position [input units].
@@ -89,41 +90,6 @@ struct Rig {
 }
 
 // ---- input profiles ------------------------------------------------------------------------
-
-/// Trapezoidal pulses of alternating sign (or one sign when `one_sign`), amplitudes uniform in
-/// `[lo, hi]`, `dur` long each (10 % ramps), with `rest` of zero input after each; plus a
-/// constant `bias`.
-#[allow(clippy::too_many_arguments)]
-fn pulses(
-    rng: &mut Rng,
-    dt: f64,
-    n: usize,
-    lo: f64,
-    hi: f64,
-    dur: f64,
-    rest: f64,
-    bias: f64,
-    one_sign: bool,
-) -> Vec<f64> {
-    let mut u = vec![bias; (0.2 / dt) as usize];
-    for k in 0..n {
-        let a = rng.range(lo, hi) * if one_sign || k % 2 == 0 { 1.0 } else { -1.0 };
-        let m = (dur / dt).round() as usize;
-        let r = (0.1 * m as f64).max(1.0) as usize;
-        for i in 0..m {
-            let s = if i < r {
-                i as f64 / r as f64
-            } else if i + r > m {
-                (m - i) as f64 / r as f64
-            } else {
-                1.0
-            };
-            u.push(bias + a * s);
-        }
-        u.extend(std::iter::repeat_n(bias, (rest / dt) as usize));
-    }
-    u
-}
 
 /// Ramps from rest to `peak` at `rate` per second and back, alternating sign, with rests.
 fn ramps(dt: f64, peaks: &[f64], rate: f64, rest: f64) -> Vec<f64> {
