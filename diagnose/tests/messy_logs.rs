@@ -477,8 +477,8 @@ fn a_vertical_axis_one_direction_per_run() {
 /// above the `none` level (parameters from derivatives over 55 samples of a quantised
 /// position, J 0.536, D 1.9-2.3 against 0.5, 2.0), and a stand-in is named. It was
 /// `input_saturation` at 7.5 N (5.67 -> 3.35 %); the output-error check now rejects that one
-/// (both refined on the fitting runs' simulation: 2.04 -> 2.77 %), but a 1-sample
-/// `input_delay` passes it (5.67 -> 4.16 %; refined 2.11 -> 1.27 %).
+/// (both refined on the fitting runs' simulation: 2.05 -> 2.50 %), but a 1-sample
+/// `input_delay` passes it (5.67 -> 4.16 %; refined 2.05 -> 1.26 %).
 #[test]
 fn a_coarse_encoder() {
     let truth = carriage(0.5, 3.0, 3.0, 2.0);
