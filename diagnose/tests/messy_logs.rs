@@ -74,6 +74,19 @@ fn record(
         .collect()
 }
 
+/// The log most tests use: four trapezoidal pulses of 8-20 N, 0.4 s long with 0.3 s rests,
+/// alternating, the truth recorded with an encoder count `q` and no noise.
+fn pulse_log(rng: &mut Rng, truth: &DriveParams, dt: f64, q: f64) -> Log {
+    let u = pulses(rng, dt, 4, 8.0, 20.0, 0.4, 0.3, 0.0, false);
+    let x = record(truth, dt, &u, 0.0, q, 0.0, rng);
+    Log {
+        dt,
+        u,
+        x,
+        kind: "other",
+    }
+}
+
 /// A fresh directory per call: tests run in parallel, and two of them may diagnose the same
 /// rig under the same name (one removing the directory while the other reads it).
 fn tmp(name: &str) -> PathBuf {
@@ -266,18 +279,7 @@ fn a_very_short_held_out_run() {
     let truth = carriage(2.0, 4.0, 4.0, 8.0);
     let dt = 5e-4;
     let q = 1e-5;
-    let mut logs: Vec<Log> = (0..4)
-        .map(|_| {
-            let u = pulses(&mut rng, dt, 4, 8.0, 20.0, 0.4, 0.3, 0.0, false);
-            let x = record(&truth, dt, &u, 0.0, q, 0.0, &mut rng);
-            Log {
-                dt,
-                u,
-                x,
-                kind: "other",
-            }
-        })
-        .collect();
+    let mut logs: Vec<Log> = (0..4).map(|_| pulse_log(&mut rng, &truth, dt, q)).collect();
     let head = "position_unit = \"m\"\ninput_unit = \"N\"";
     let (ref_out, secs) = diagnose_logs("short_held_ref", head, &logs);
     println!("{}", line("four_long_runs_2kHz", secs, &ref_out));
@@ -376,14 +378,7 @@ fn runs_at_different_sample_rates() {
     let logs: Vec<Log> = (0..4)
         .map(|k| {
             let dt = if k < 2 { 1e-3 } else { 5e-3 };
-            let u = pulses(&mut rng, dt, 4, 8.0, 20.0, 0.4, 0.3, 0.0, false);
-            let x = record(&truth, dt, &u, 0.0, 1e-6, 0.0, &mut rng);
-            Log {
-                dt,
-                u,
-                x,
-                kind: "other",
-            }
+            pulse_log(&mut rng, &truth, dt, 1e-6)
         })
         .collect();
     let (out, secs) = diagnose_logs(
@@ -605,16 +600,7 @@ fn nothing_saturated_names_no_saturation() {
             _ => truth.deadband = 3.0,
         }
         let logs: Vec<Log> = (0..4)
-            .map(|_| {
-                let u = pulses(&mut rng, dt, 4, 8.0, 20.0, 0.4, 0.3, 0.0, false);
-                let x = record(&truth, dt, &u, 0.0, 1e-6, 0.0, &mut rng);
-                Log {
-                    dt,
-                    u,
-                    x,
-                    kind: "other",
-                }
-            })
+            .map(|_| pulse_log(&mut rng, &truth, dt, 1e-6))
             .collect();
         let (out, secs) = diagnose_logs(name, head, &logs);
         println!("{}", line(name, secs, &out));
