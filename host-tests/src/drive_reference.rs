@@ -6,7 +6,9 @@
 //! (the model does; the tests only give it valid ones).
 //!
 //! Units: position m or rad, force N or N m, inertia kg or kg m^2, time s. Positive velocity
-//! is increasing position; friction magnitudes are >= 0.
+//! is increasing position; friction magnitudes are >= 0. The optional Stribeck velocity `vs`
+//! and load friction `mu` (0: off) follow the contract's "Friction of a moving axis" and
+//! "Friction levels of a step".
 
 // Spelled like the contract's pseudo-code.
 #![allow(clippy::assign_op_pattern, clippy::manual_clamp)]
@@ -81,6 +83,24 @@ pub struct RefDriveParams {
     pub min: f64,
     /// Upper end stop.
     pub max: f64,
+    /// Stribeck velocity `vs` (0: none).
+    pub vs: f64,
+    /// Load friction coefficient `mu` (0: none).
+    pub mu: f64,
+}
+
+/// The dry friction levels of one step: `Cp'`, `Cn'`, `Bp'`, `Bn'` of the contract (the
+/// parameters' own without load friction).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Levels {
+    /// `Cp'`.
+    pub cp: f64,
+    /// `Cn'`.
+    pub cn: f64,
+    /// `Bp'`.
+    pub bp: f64,
+    /// `Bn'`.
+    pub bn: f64,
 }
 
 /// Why the reference rejected a step.
@@ -120,6 +140,8 @@ pub struct RefDrive {
     pub n_steps: u64,
     /// Applied force of the last accepted step.
     pub f_last: f64,
+    /// Drive effort `Fd` of the last accepted step.
+    pub fd_last: f64,
     /// All accepted inputs, oldest first (a plain history instead of a ring).
     pub history: Vec<f64>,
 }
@@ -189,6 +211,7 @@ impl RefDrive {
             mode: DriveMode::Stopped,
             n_steps: 0,
             f_last: 0.0,
+            fd_last: 0.0,
             history: Vec::new(),
         };
         if r.set_state(x0, 0.0) {
@@ -231,27 +254,68 @@ impl RefDrive {
         f - position_force(&self.prm.p, x)
     }
 
-    fn acc(&self, x: f64, v: f64, mode: DriveMode, f: f64) -> f64 {
-        let fr = match mode {
-            DriveMode::Stopped => return 0.0,
-            DriveMode::Positive => self.prm.cp + self.prm.dp * v,
-            DriveMode::Negative => -self.prm.cn + self.prm.dn * v,
+    /// The contract's levels for the drive effort `fd`.
+    pub fn levels(&self, fd: f64) -> Levels {
+        let p = &self.prm;
+        if p.mu > 0.0 {
+            let a = if fd < 0.0 { -fd } else { fd };
+            let l = p.mu * a;
+            Levels {
+                cp: p.cp + l,
+                cn: p.cn + l,
+                bp: p.bp + l,
+                bn: p.bn + l,
+            }
+        } else {
+            Levels {
+                cp: p.cp,
+                cn: p.cn,
+                bp: p.bp,
+                bn: p.bn,
+            }
+        }
+    }
+
+    /// Friction `f` of a moving axis (contract: `Sp + Dp*v` / `-Sn + Dn*v`).
+    fn friction(&self, lv: &Levels, mode: DriveMode, v: f64) -> f64 {
+        let vs = self.prm.vs;
+        // S = C' + (B' - C') * exp(-(r*r)), r = v / vs; S = C' without Stribeck.
+        let stribeck = |c: f64, b: f64| -> f64 {
+            if vs > 0.0 {
+                let r = v / vs;
+                let g = libm::exp(-(r * r));
+                c + (b - c) * g
+            } else {
+                c
+            }
         };
+        match mode {
+            DriveMode::Stopped => 0.0,
+            DriveMode::Positive => stribeck(lv.cp, lv.bp) + self.prm.dp * v,
+            DriveMode::Negative => -stribeck(lv.cn, lv.bn) + self.prm.dn * v,
+        }
+    }
+
+    fn acc(&self, lv: &Levels, x: f64, v: f64, mode: DriveMode, f: f64) -> f64 {
+        if mode == DriveMode::Stopped {
+            return 0.0;
+        }
+        let fr = self.friction(lv, mode, v);
         (self.hold(x, f) - fr) / self.prm.i
     }
 
-    fn resolve(&self, x: f64, v: f64, mode: DriveMode, f: f64) -> (DriveMode, f64) {
+    fn resolve(&self, lv: &Levels, x: f64, v: f64, mode: DriveMode, f: f64) -> (DriveMode, f64) {
         if mode != DriveMode::Stopped {
-            return (mode, self.acc(x, v, mode, f));
+            return (mode, self.acc(lv, x, v, mode, f));
         }
         let h = self.hold(x, f);
         let up = if x < self.prm.max {
-            Some(h - self.prm.bp)
+            Some(h - lv.bp)
         } else {
             None
         };
         let down = if x > self.prm.min {
-            Some(-self.prm.bn - h)
+            Some(-lv.bn - h)
         } else {
             None
         };
@@ -268,7 +332,7 @@ impl RefDrive {
         let Some(dir) = dir else {
             return (DriveMode::Stopped, 0.0);
         };
-        let a = self.acc(x, v, dir, f);
+        let a = self.acc(lv, x, v, dir, f);
         let ok = if dir == DriveMode::Positive {
             a > 0.0
         } else {
@@ -282,17 +346,27 @@ impl RefDrive {
     }
 
     /// RK4 over `tau`: `(xn, vn, a4)`.
-    fn rk4(&self, x: f64, v: f64, a1: f64, mode: DriveMode, f: f64, tau: f64) -> [f64; 3] {
+    #[allow(clippy::too_many_arguments)]
+    fn rk4(
+        &self,
+        lv: &Levels,
+        x: f64,
+        v: f64,
+        a1: f64,
+        mode: DriveMode,
+        f: f64,
+        tau: f64,
+    ) -> [f64; 3] {
         let half = tau * 0.5;
         let x2 = x + half * v;
         let v2 = v + half * a1;
-        let a2 = self.acc(x2, v2, mode, f);
+        let a2 = self.acc(lv, x2, v2, mode, f);
         let x3 = x + half * v2;
         let v3 = v + half * a2;
-        let a3 = self.acc(x3, v3, mode, f);
+        let a3 = self.acc(lv, x3, v3, mode, f);
         let x4 = x + tau * v3;
         let v4 = v + tau * a3;
-        let a4 = self.acc(x4, v4, mode, f);
+        let a4 = self.acc(lv, x4, v4, mode, f);
         let w = tau / 6.0;
         let xn = x + w * (((v + 2.0 * v2) + 2.0 * v3) + v4);
         let vn = v + w * (((a1 + 2.0 * a2) + 2.0 * a3) + a4);
@@ -311,21 +385,23 @@ impl RefDrive {
         } else {
             0.0
         };
-        let f = self.prm.k * dead_band(un, self.prm.d) + self.prm.b;
+        let fd = self.prm.k * dead_band(un, self.prm.d);
+        let f = fd + self.prm.b;
         if !f.is_finite() {
             return Err(RefDriveError::ForceNotFinite);
         }
+        let lv = self.levels(fd);
         let (min, max) = (self.prm.min, self.prm.max);
         let mut info = RefDriveInfo::default();
         let (mut x, mut v) = (self.x, self.v);
-        let (mut mode, mut a1) = self.resolve(x, v, self.mode, f);
+        let (mut mode, mut a1) = self.resolve(&lv, x, v, self.mode, f);
         let mut done = 0.0;
         for seg in 0..SEGMENTS {
             if mode == DriveMode::Stopped {
                 break;
             }
             let tau = self.h - done;
-            let [xn, vn, a4] = self.rk4(x, v, a1, mode, f, tau);
+            let [xn, vn, a4] = self.rk4(&lv, x, v, a1, mode, f, tau);
             if seg == SEGMENTS - 1 {
                 x = xn;
                 v = vn;
@@ -363,7 +439,7 @@ impl RefDrive {
                 (None, Some(tl)) => (tl, true),
             };
             let s = theta * tau;
-            let [xe, _, _] = self.rk4(x, v, a1, mode, f, s);
+            let [xe, _, _] = self.rk4(&lv, x, v, a1, mode, f, s);
             x = if !at_limit {
                 clamp(xe, min, max)
             } else if positive {
@@ -374,7 +450,7 @@ impl RefDrive {
             v = 0.0;
             info.events += 1;
             done = done + s;
-            let r = self.resolve(x, 0.0, DriveMode::Stopped, f);
+            let r = self.resolve(&lv, x, 0.0, DriveMode::Stopped, f);
             mode = r.0;
             a1 = r.1;
             if done >= self.h {
@@ -412,6 +488,7 @@ impl RefDrive {
         self.v = v;
         self.mode = mode;
         self.f_last = f;
+        self.fd_last = fd;
         self.history.push(u);
         self.n_steps += 1;
         Ok(info)
@@ -420,13 +497,13 @@ impl RefDrive {
     /// `(acceleration, friction, position force, applied force)` at the current state.
     pub fn output(&self) -> [f64; 4] {
         let p = position_force(&self.prm.p, self.x);
+        let lv = self.levels(self.fd_last);
         let fr = match self.mode {
             DriveMode::Stopped => self.f_last - p,
-            DriveMode::Positive => self.prm.cp + self.prm.dp * self.v,
-            DriveMode::Negative => -self.prm.cn + self.prm.dn * self.v,
+            m => self.friction(&lv, m, self.v),
         };
         [
-            self.acc(self.x, self.v, self.mode, self.f_last),
+            self.acc(&lv, self.x, self.v, self.mode, self.f_last),
             fr,
             p,
             self.f_last,

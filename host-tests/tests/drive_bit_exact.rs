@@ -1,8 +1,9 @@
 //! The drive model (`crane_model::Drive<f64>`) must reproduce the independent reference
 //! (`host_tests::drive_reference`) bit for bit: position, velocity, mode, time, the step
 //! report and `output()` after every step (accepted or rejected with the same error), for
-//! random valid parameters (with and without stiction, spring and pendulum, dead band, delay,
-//! end stops) and random inputs (holds, ramps, steps, sines, noise, bad values).
+//! random valid parameters (with and without stiction, Stribeck weakening and load friction,
+//! spring and pendulum, dead band, delay, end stops) and random inputs (holds, ramps, steps,
+//! sines, noise, bad values).
 
 use crane_model::{
     Drive, DriveParams, DriveStepError, Mode, Motion, PositionForce, MAX_DRIVE_DELAY_STEPS,
@@ -43,6 +44,8 @@ fn to_ref(p: &DriveParams) -> RefDriveParams {
         n: p.delay_steps,
         min: p.min,
         max: p.max,
+        vs: p.stribeck_velocity,
+        mu: p.load_friction,
     }
 }
 
@@ -83,6 +86,11 @@ fn params_strategy() -> impl Strategy<Value = DriveParams> {
         (0.0f64..60.0, -1.0f64..1.0)
             .prop_map(|(stiffness, center)| PositionForce::Pendulum { stiffness, center }),
     ];
+    // Stribeck velocity and load friction: each non-zero in half of the cases.
+    let extra = (
+        prop_oneof![1 => Just(0.0), 1 => 0.002f64..0.5],
+        prop_oneof![1 => Just(0.0), 1 => 0.0f64..0.9],
+    );
     let limits = prop_oneof![
         Just((f64::NEG_INFINITY, f64::INFINITY)),
         (0.01f64..0.5).prop_map(|b| (f64::NEG_INFINITY, b)),
@@ -98,6 +106,7 @@ fn params_strategy() -> impl Strategy<Value = DriveParams> {
             prop_oneof![Just(0usize), 0..=MAX_DRIVE_DELAY_STEPS],
         ),
         limits,
+        extra,
     )
         .prop_map(
             |(
@@ -106,6 +115,7 @@ fn params_strategy() -> impl Strategy<Value = DriveParams> {
                 pf,
                 (d, delay),
                 (lo, hi),
+                (vs, mu),
             )| {
                 DriveParams {
                     motion: if rot { Motion::Rotary } else { Motion::Linear },
@@ -123,6 +133,8 @@ fn params_strategy() -> impl Strategy<Value = DriveParams> {
                     delay_steps: delay,
                     min: lo,
                     max: hi,
+                    stribeck_velocity: vs,
+                    load_friction: mu,
                 }
             },
         )
@@ -291,7 +303,9 @@ proptest! {
 }
 
 /// The random cases exercise what they claim: over fixed seeds of the same generators, the
-/// drive sticks, slips, reverses through `Stopped`, hits end stops and rejects bad inputs.
+/// drive sticks, slips, reverses through `Stopped`, hits end stops and rejects bad inputs,
+/// and the Stribeck and load terms are on in a good share of the cases (the Stribeck one with
+/// stiction, on steps that move slower than `2 vs`, where its weakening is not negligible).
 #[test]
 fn random_programs_cover_sticking_slipping_stops_and_rejections() {
     use proptest::strategy::ValueTree;
@@ -299,6 +313,8 @@ fn random_programs_cover_sticking_slipping_stops_and_rejections() {
     let mut runner = TestRunner::deterministic();
     let (mut events, mut stuck_steps, mut at_stop, mut rejected, mut stiction) =
         (0u64, 0u64, 0u64, 0u64, 0u64);
+    let (mut stribeck, mut stribeck_slow_steps, mut load, mut loaded_steps) =
+        (0u64, 0u64, 0u64, 0u64);
     for _ in 0..64 {
         let p = params_strategy()
             .new_tree(&mut runner)
@@ -311,6 +327,10 @@ fn random_programs_cover_sticking_slipping_stops_and_rejections() {
         if p.breakaway_pos > p.kinetic_pos {
             stiction += 1;
         }
+        let weakens = p.stribeck_velocity > 0.0
+            && (p.breakaway_pos > p.kinetic_pos || p.breakaway_neg > p.kinetic_neg);
+        stribeck += u64::from(weakens);
+        load += u64::from(p.load_friction > 0.0);
         let mut m: Drive = Drive::new(&p, 1e-3, 0.0f64.clamp(p.min, p.max)).expect("valid");
         for u in inputs(&pieces, 1e-3) {
             match m.step(u) {
@@ -323,12 +343,27 @@ fn random_programs_cover_sticking_slipping_stops_and_rejections() {
             if m.x() == p.min || m.x() == p.max {
                 at_stop += 1;
             }
+            let moving = m.mode() != Mode::Stopped;
+            if weakens && moving && m.v().abs() < 2.0 * p.stribeck_velocity {
+                stribeck_slow_steps += 1;
+            }
+            if p.load_friction > 0.0 && m.output().applied != p.offset {
+                loaded_steps += 1;
+            }
         }
     }
     eprintln!("events {events}, stuck steps {stuck_steps}, at a stop {at_stop}, rejected {rejected}, stiction cases {stiction}");
+    eprintln!("Stribeck cases with stiction {stribeck} (moving steps below 2 vs: {stribeck_slow_steps}), load-friction cases {load} (steps with a drive effort: {loaded_steps})");
     assert!(events > 100, "located events: {events}");
     assert!(stuck_steps > 1000, "stuck steps: {stuck_steps}");
     assert!(at_stop > 100, "steps at an end stop: {at_stop}");
     assert!(rejected > 0, "rejected steps: {rejected}");
     assert!(stiction > 10, "cases with stiction: {stiction}");
+    assert!(stribeck > 10, "Stribeck cases with stiction: {stribeck}");
+    assert!(
+        stribeck_slow_steps > 1000,
+        "moving steps below 2 vs: {stribeck_slow_steps}"
+    );
+    assert!(load > 16, "load-friction cases: {load}");
+    assert!(loaded_steps > 10_000, "loaded steps: {loaded_steps}");
 }

@@ -135,6 +135,8 @@ pub enum Problem {
     BelowKinetic,
     /// NaN where an infinite value is allowed (e.g. an absent end stop).
     NotANumber,
+    /// Must be < 1 (e.g. a load-dependent friction coefficient).
+    NotBelowOne,
 }
 
 /// A rejected parameter, configuration or initial-state field.
@@ -166,6 +168,7 @@ impl fmt::Display for Error {
             Problem::TooLarge => "exceeds the fixed capacity",
             Problem::BelowKinetic => "must be >= the kinetic friction of its direction",
             Problem::NotANumber => "must not be NaN",
+            Problem::NotBelowOne => "must be < 1",
         };
         write!(f, "`{}` {} (got {})", self.field, what, self.value)
     }

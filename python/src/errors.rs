@@ -45,6 +45,7 @@ pub fn problem_name(p: Problem) -> &'static str {
         Problem::TooLarge => "too_large",
         Problem::BelowKinetic => "below_kinetic",
         Problem::NotANumber => "not_a_number",
+        Problem::NotBelowOne => "not_below_one",
     }
 }
 

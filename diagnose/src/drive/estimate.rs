@@ -436,6 +436,8 @@ pub fn estimate(
         delay_steps: 0,
         min: f64::NEG_INFINITY,
         max: f64::INFINITY,
+        stribeck_velocity: 0.0,
+        load_friction: 0.0,
     };
     Ok(Estimate {
         params,

@@ -1,4 +1,5 @@
-//! Forces of the drive: the position force, friction per mode, and the acceleration.
+//! Forces of the drive: the position force, friction per mode (with the optional Stribeck
+//! weakening and load-dependent friction), and the acceleration.
 //!
 //! The operation order of every expression is the contract of `NUMERICS.md` ("Single-axis
 //! drive"); the reference in `host-tests/src/drive_reference.rs` computes the same bits.
@@ -42,6 +43,10 @@ impl<R: Real> Restoring<R> {
 }
 
 /// Validated parameters in the model's scalar type.
+///
+/// The four dry-friction levels are the parameters' own in [`Drive`](super::Drive)'s copy;
+/// with load friction, a step works on a copy whose levels include the step's load share
+/// (see [`Coeffs::loaded`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Coeffs<R> {
     pub(crate) inertia: R,
@@ -57,6 +62,14 @@ pub(crate) struct Coeffs<R> {
     pub(crate) deadband: R,
     pub(crate) min: R,
     pub(crate) max: R,
+    /// Stribeck velocity [m/s or rad/s]; used only when `stribeck_on`.
+    pub(crate) stribeck: R,
+    /// `stribeck > 0` in `R` (a velocity that rounds to 0 in `f32` means none).
+    pub(crate) stribeck_on: bool,
+    /// Load friction coefficient `mu`; used only when `load_on`.
+    pub(crate) load: R,
+    /// `load > 0` in `R`.
+    pub(crate) load_on: bool,
 }
 
 impl<R: Real> Coeffs<R> {
@@ -76,7 +89,31 @@ impl<R: Real> Coeffs<R> {
             deadband: R::from_f64(p.deadband),
             min: R::from_f64(p.min),
             max: R::from_f64(p.max),
+            stribeck: R::from_f64(p.stribeck_velocity),
+            stribeck_on: R::from_f64(p.stribeck_velocity) > R::ZERO,
+            load: R::from_f64(p.load_friction),
+            load_on: R::from_f64(p.load_friction) > R::ZERO,
         }
+    }
+
+    /// The coefficients of a step whose drive effort is `fd = gain * deadband(u)` [N or N m]:
+    /// with load friction each dry level grows by `L = load * |fd|` (`Cp + L`, `Cn + L`,
+    /// `Bp + L`, `Bn + L`, one rounding each); without, `None` (the levels are the
+    /// parameters', no operation added).
+    #[inline]
+    pub(crate) fn loaded(&self, fd: R) -> Option<Self> {
+        if !self.load_on {
+            return None;
+        }
+        let mag = if fd < R::ZERO { -fd } else { fd };
+        let l = self.load * mag;
+        Some(Coeffs {
+            kinetic_pos: self.kinetic_pos + l,
+            kinetic_neg: self.kinetic_neg + l,
+            breakaway_pos: self.breakaway_pos + l,
+            breakaway_neg: self.breakaway_neg + l,
+            ..*self
+        })
     }
 
     /// Holding force at `x` under the applied force `f`: `f - position_force(x)`.
@@ -85,14 +122,32 @@ impl<R: Real> Coeffs<R> {
         f - self.restoring.at(x)
     }
 
+    /// Dry friction magnitude [N or N m] of an axis moving at `v` between the `kinetic` and
+    /// `breakaway` levels of its direction: `kinetic + (breakaway - kinetic) * exp(-(x * x))`
+    /// with `x = v / stribeck` (libm `exp`, one evaluation); `kinetic` itself, no operation,
+    /// without Stribeck weakening.
+    #[inline]
+    fn dry(&self, kinetic: R, breakaway: R, v: R) -> R {
+        if !self.stribeck_on {
+            return kinetic;
+        }
+        let x = v / self.stribeck;
+        kinetic + (breakaway - kinetic) * (-(x * x)).exp()
+    }
+
     /// Friction of a moving axis [N or N m], the term subtracted in the equation of motion:
-    /// `kinetic_pos + viscous_pos * v` (Positive), `-kinetic_neg + viscous_neg * v`
-    /// (Negative); 0 when stopped (the holding force is then the friction, see `output`).
+    /// `Sp + viscous_pos * v` (Positive), `-Sn + viscous_neg * v` (Negative), with the dry
+    /// magnitudes `Sp`, `Sn` of `dry` (`kinetic_pos`, `kinetic_neg` without Stribeck
+    /// weakening); 0 when stopped (the holding force is then the friction, see `output`).
     #[inline]
     pub(crate) fn friction(&self, mode: Mode, v: R) -> R {
         match mode {
-            Mode::Positive => self.kinetic_pos + self.viscous_pos * v,
-            Mode::Negative => -self.kinetic_neg + self.viscous_neg * v,
+            Mode::Positive => {
+                self.dry(self.kinetic_pos, self.breakaway_pos, v) + self.viscous_pos * v
+            }
+            Mode::Negative => {
+                -self.dry(self.kinetic_neg, self.breakaway_neg, v) + self.viscous_neg * v
+            }
             Mode::Stopped => R::ZERO,
         }
     }

@@ -6,6 +6,9 @@
 //! the kinetic level: stiction); a moving axis whose velocity reaches 0 stops, the stop
 //! located inside the step, and sticks again while the holding force stays within the
 //! breakaway levels. So a force ramp against a spring gives the exact stick-slip staircase.
+//! Optional: Stribeck weakening (the sliding dry friction falls from the breakaway to the
+//! kinetic level with speed) and load-dependent friction (all dry levels grow with the drive
+//! effort); see [`DriveParams`].
 //!
 //! Where to look:
 //! - [`DriveParams`] (`params.rs`): parameters, units, signs, validation.
@@ -85,9 +88,11 @@ pub struct DriveOutput<R: Real = f64> {
     /// Acceleration [m/s^2 or rad/s^2]; exactly 0 when stopped.
     pub acceleration: R,
     /// Friction [N or N m], the term subtracted in the equation of motion: moving positive
-    /// `kinetic_pos + viscous_pos * v` (> 0 opposes motion), moving negative
-    /// `-kinetic_neg + viscous_neg * v`; stopped, the static friction that holds the axis,
-    /// equal to the holding force `applied - position_force`.
+    /// `Sp + viscous_pos * v` (> 0 opposes motion), moving negative `-Sn + viscous_neg * v`,
+    /// with the dry levels `Sp`, `Sn` of [`DriveParams`] (`kinetic_pos`, `kinetic_neg` without
+    /// Stribeck weakening and load friction; the load share from the last step's drive
+    /// effort); stopped, the static friction that holds the axis, equal to the holding force
+    /// `applied - position_force`.
     pub friction: R,
     /// Position force `position_force(x)` [N or N m], positive when it pushes towards negative
     /// (restoring from above the centre).
@@ -111,6 +116,9 @@ pub struct Drive<R: Real = f64> {
     mode: Mode,
     steps: u64,
     applied: R,
+    /// Drive effort `gain * deadband(u)` of the last accepted step [N or N m] (0 before the
+    /// first): the load-friction share of [`Drive::output`].
+    effort: R,
     delay: DelayLine<R>,
     /// `position_force(x)` of a stopped axis that has not moved since it was computed: a
     /// resting axis costs no position-force evaluation per step (same bits).
@@ -134,6 +142,7 @@ impl<R: Real> Drive<R> {
             mode: Mode::Stopped,
             steps: 0,
             applied: R::ZERO,
+            effort: R::ZERO,
             delay: DelayLine::new(),
             resting_force: None,
         };
@@ -175,7 +184,8 @@ impl<R: Real> Drive<R> {
 
     /// Advances by one step `h` with input `u` [input units, e.g. V, or force when
     /// `gain = 1`], held over the step. Input path: delay line, dead band, then
-    /// `gain * u + offset`.
+    /// `gain * u + offset`. With load friction the step's dry-friction levels grow by
+    /// `load_friction * |gain * deadband(u)|` (constant over the step, like the force).
     ///
     /// A non-finite input or force, or a non-finite result, rejects the step: state, mode,
     /// time and delay line stay as they were. Every accepted state is finite and within
@@ -187,10 +197,14 @@ impl<R: Real> Drive<R> {
         }
         let k = self.params.delay_steps;
         let ud = self.delay.delayed(u, k);
-        let f = self.c.gain * deadband(ud, self.c.deadband) + self.c.offset;
+        let fd = self.c.gain * deadband(ud, self.c.deadband);
+        let f = fd + self.c.offset;
         if !f.is_finite() {
             return Err(DriveStepError::ForceNotFinite);
         }
+        // The step's coefficients: the parameters', or with the load share in the levels.
+        let loaded = self.c.loaded(fd);
+        let c = loaded.as_ref().unwrap_or(&self.c);
         let px = if self.mode == Mode::Stopped {
             Some(match self.resting_force {
                 Some(p) => p,
@@ -200,16 +214,16 @@ impl<R: Real> Drive<R> {
             None
         };
         if let Some(p) = px {
-            if step::release(&self.c, self.x, self.v, f - p).0 == Mode::Stopped {
+            if step::release(c, self.x, self.v, f - p).0 == Mode::Stopped {
                 // Held for the whole step (the holding force is constant over it): the state
                 // stays as it is, bit for bit; what `step::step` would do, without its set-up.
-                self.commit_input(f, u, k);
+                self.commit_input(f, fd, u, k);
                 self.resting_force = Some(p);
                 return Ok(DriveReport::default());
             }
         }
         let start = (self.x, self.v, self.mode);
-        let (x, v, mode, report) = step::step(&self.c, self.h, start, f, px.map(|p| f - p));
+        let (x, v, mode, report) = step::step(c, self.h, start, f, px.map(|p| f - p));
         if !(x.is_finite() && v.is_finite()) {
             return Err(DriveStepError::NonFinite);
         }
@@ -220,14 +234,16 @@ impl<R: Real> Drive<R> {
         self.x = x;
         self.v = v;
         self.mode = mode;
-        self.commit_input(f, u, k);
+        self.commit_input(f, fd, u, k);
         Ok(report)
     }
 
-    /// Records an accepted step's applied force `f` and input `u` (delay `k` steps).
+    /// Records an accepted step's applied force `f`, drive effort `fd` and input `u` (delay
+    /// `k` steps).
     #[inline]
-    fn commit_input(&mut self, f: R, u: R, k: usize) {
+    fn commit_input(&mut self, f: R, fd: R, u: R, k: usize) {
         self.applied = f;
+        self.effort = fd;
         if k > 0 {
             self.delay.push(u);
         }
@@ -272,16 +288,18 @@ impl<R: Real> Drive<R> {
         &self.params
     }
 
-    /// Forces and acceleration at the current state with the last applied force (0 before
-    /// the first step).
+    /// Forces and acceleration at the current state with the last applied force and drive
+    /// effort (0 before the first step).
     pub fn output(&self) -> DriveOutput<R> {
-        let position_force = self.c.restoring.at(self.x);
+        let loaded = self.c.loaded(self.effort);
+        let c = loaded.as_ref().unwrap_or(&self.c);
+        let position_force = c.restoring.at(self.x);
         let friction = match self.mode {
             Mode::Stopped => self.applied - position_force,
-            m => self.c.friction(m, self.v),
+            m => c.friction(m, self.v),
         };
         DriveOutput {
-            acceleration: self.c.accel(self.x, self.v, self.mode, self.applied),
+            acceleration: c.accel(self.x, self.v, self.mode, self.applied),
             friction,
             position_force,
             applied: self.applied,

@@ -74,11 +74,23 @@ pub enum PositionForce {
 /// Parameters of a single-axis drive (motor + screw, belt or gear + carriage, or a
 /// direct-drive joint), in SI or input units (see [`Motion`]).
 ///
-/// Equation of motion, with `F = gain * deadband(u(t - delay), deadband) + offset`:
-/// `inertia * xdd = F - position_force(x) - friction(mode, v)`, friction
-/// `kinetic_pos + viscous_pos * v` moving positive, `-kinetic_neg + viscous_neg * v` moving
-/// negative; a stopped axis holds (`v = 0`, `xdd = 0`) until `F - position_force(x)` exceeds
-/// `breakaway_pos` or falls below `-breakaway_neg`.
+/// Equation of motion, with the drive effort `Fd = gain * deadband(u(t - delay), deadband)`
+/// and the applied force `F = Fd + offset`:
+/// `inertia * xdd = F - position_force(x) - friction(mode, v)`.
+///
+/// Friction levels of a step (the input is held over it, so they are constant in it), with
+/// the load share `L = load_friction * |Fd|` (the offset carries no load: `L` grows with the
+/// effort the transmission passes, not with a constant bias): kinetic `Cp = kinetic_pos + L`,
+/// `Cn = kinetic_neg + L`, breakaway `Bp = breakaway_pos + L`, `Bn = breakaway_neg + L`.
+/// Dry friction of a moving axis, with `g = exp(-(v / stribeck_velocity)^2)` (`g = 0` when
+/// `stribeck_velocity = 0`): `Sp = Cp + (Bp - Cp) g` moving positive, `Sn = Cn + (Bn - Cn) g`
+/// moving negative, so it falls from the breakaway level at `v -> 0` to the kinetic level at
+/// `|v| >> stribeck_velocity`. Friction `Sp + viscous_pos * v` moving positive,
+/// `-Sn + viscous_neg * v` moving negative (both oppose the motion). A stopped axis holds
+/// (`v = 0`, `xdd = 0`) while `-Bn <= F - position_force(x) <= Bp`, and breaks away when the
+/// holding force passes `Bp` or `-Bn`. With `stribeck_velocity = 0` and `load_friction = 0`
+/// (the defaults) the friction is the classic kinetic + viscous law with stiction, computed
+/// with exactly the operations it had before these two fields existed.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DriveParams {
     /// Linear or rotary (units only).
@@ -117,11 +129,23 @@ pub struct DriveParams {
     pub min: f64,
     /// Upper end stop [m or rad] (may be `+inf`: none; not NaN; > `min`).
     pub max: f64,
+    /// Stribeck velocity `vs` [m/s or rad/s] (>= 0, finite); 0: no velocity weakening.
+    /// Positive: the dry friction of a moving axis falls from the breakaway level to the
+    /// kinetic level as `exp(-(v / vs)^2)` (about 37 % of the excess left at `|v| = vs`, 2 % at
+    /// `2 vs`). Needs stiction (`breakaway > kinetic`) to have an effect.
+    pub stribeck_velocity: f64,
+    /// Load-dependent friction coefficient `mu` (dimensionless, in `[0, 1)`, finite); 0: none.
+    /// Both the kinetic and the breakaway levels grow by `mu * |gain * deadband(u)|`, the drive
+    /// effort before the `offset` is added (gearbox or screw friction that grows with the
+    /// transmitted force). A stopped axis under `F = Fd` (no offset, no position force) then
+    /// holds while `|F| <= breakaway / (1 - mu)`.
+    pub load_friction: f64,
 }
 
 impl Default for DriveParams {
-    /// A 1 kg linear carriage with 1 N/V gain, no friction, no position force, no dead band,
-    /// no delay and no end stops: the frictionless point mass.
+    /// A 1 kg linear carriage with 1 N/V gain, no friction (no Stribeck weakening, no load
+    /// friction), no position force, no dead band, no delay and no end stops: the frictionless
+    /// point mass.
     fn default() -> Self {
         DriveParams {
             motion: Motion::Linear,
@@ -139,6 +163,8 @@ impl Default for DriveParams {
             delay_steps: 0,
             min: f64::NEG_INFINITY,
             max: f64::INFINITY,
+            stribeck_velocity: 0.0,
+            load_friction: 0.0,
         }
     }
 }
@@ -175,7 +201,9 @@ impl DriveParams {
     /// `deadband` at least 0 and finite; `breakaway_pos >= kinetic_pos`, `breakaway_neg >= kinetic_neg`
     /// (finite; `BelowKinetic` otherwise); `offset` finite; position-force stiffness >= 0 and
     /// centre finite; `delay_steps <= MAX_DRIVE_DELAY_STEPS` (`TooLarge`); `min`, `max` not
-    /// NaN (infinite allowed) with `min < max` (`EmptyRange`, field `"min"`).
+    /// NaN (infinite allowed) with `min < max` (`EmptyRange`, field `"min"`);
+    /// `stribeck_velocity` at least 0 and finite; `load_friction` at least 0, finite and
+    /// below 1 (`NotBelowOne`).
     pub fn validate(&self) -> Result<(), Error> {
         check("inertia", self.inertia, Problem::NotPositive)?;
         check("gain", self.gain, Problem::NotPositive)?;
@@ -202,6 +230,19 @@ impl DriveParams {
                 field: "delay_steps",
                 problem: Problem::TooLarge,
                 value: self.delay_steps as f64,
+            });
+        }
+        check(
+            "stribeck_velocity",
+            self.stribeck_velocity,
+            Problem::Negative,
+        )?;
+        check("load_friction", self.load_friction, Problem::Negative)?;
+        if self.load_friction >= 1.0 {
+            return Err(Error {
+                field: "load_friction",
+                problem: Problem::NotBelowOne,
+                value: self.load_friction,
             });
         }
         not_nan("min", self.min)?;

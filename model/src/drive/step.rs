@@ -14,6 +14,13 @@
 //! `n = 8`, plus at most `2 * 30` Hermite evaluations per located segment (420). The usual
 //! moving step costs 4 evaluations and a resting step at most 1 position-force evaluation (none
 //! after the first: [`Drive`](super::Drive) keeps it while the axis rests).
+//!
+//! The two optional friction effects keep these counts and make an evaluation dearer:
+//! Stribeck weakening adds to every moving evaluation one `exp` (libm), a division, two
+//! multiplications, a subtraction and an addition (the usual moving step: 4 `exp`); load
+//! friction adds once per step, before any evaluation, an absolute value, a multiplication
+//! and four additions (the step's dry levels in a copy of the coefficients,
+//! `Coeffs::loaded`), nothing per evaluation. With both off no operation is added.
 
 use super::force::Coeffs;
 use crate::modes::Mode;
@@ -48,7 +55,8 @@ pub(crate) fn resolve<R: Real>(c: &Coeffs<R>, x: R, v: R, mode: Mode, f: R) -> (
 
 /// The breakaway guards of a stopped axis at `x` with holding force `hold`
 /// (`f - position_force(x)`): it breaks away positive if `hold > breakaway_pos` (and
-/// `x < max`), negative if `hold < -breakaway_neg` (and `x > min`), the larger positive margin
+/// `x < max`), negative if `hold < -breakaway_neg` (and `x > min`), with the levels of `c`
+/// (the step's, load share included), the larger positive margin
 /// winning (positive on a tie); the release stands only if the acceleration
 /// `(hold - friction) / inertia` then has the direction's sign. Returns the mode and the
 /// acceleration (0 when it stays stopped).
