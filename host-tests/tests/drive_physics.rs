@@ -1,5 +1,6 @@
 //! Physics of the single-axis drive (`crane_model::Drive`): energy, exact sticking, the
-//! stick-slip staircase, end stops, input path, parameter and input validation.
+//! stick-slip staircase, end stops, input path, parameter and input validation, Stribeck
+//! weakening and load-dependent friction.
 
 use crane_model::{
     Drive, DriveParams, DriveStepError, Mode, Motion, PositionForce, Problem, MAX_DRIVE_DELAY_STEPS,
@@ -515,7 +516,7 @@ fn bad_parameters_name_their_field() {
     };
     assert!(Drive::<f64>::new(&ok, H, 0.0).is_ok());
     type Case = (fn(&mut DriveParams), &'static str, Problem);
-    let cases: [Case; 17] = [
+    let cases: [Case; 22] = [
         (|p| p.inertia = 0.0, "inertia", Problem::NotPositive),
         (|p| p.inertia = f64::INFINITY, "inertia", Problem::NotFinite),
         (|p| p.gain = -1.0, "gain", Problem::NotPositive),
@@ -558,6 +559,31 @@ fn bad_parameters_name_their_field() {
         (|p| p.min = f64::NAN, "min", Problem::NotANumber),
         (|p| p.max = f64::NAN, "max", Problem::NotANumber),
         (|p| (p.min, p.max) = (1.0, 1.0), "min", Problem::EmptyRange),
+        (
+            |p| p.stribeck_velocity = -0.01,
+            "stribeck_velocity",
+            Problem::Negative,
+        ),
+        (
+            |p| p.stribeck_velocity = f64::INFINITY,
+            "stribeck_velocity",
+            Problem::NotFinite,
+        ),
+        (
+            |p| p.load_friction = -0.1,
+            "load_friction",
+            Problem::Negative,
+        ),
+        (
+            |p| p.load_friction = 1.0,
+            "load_friction",
+            Problem::NotBelowOne,
+        ),
+        (
+            |p| p.load_friction = f64::NAN,
+            "load_friction",
+            Problem::NotFinite,
+        ),
     ];
     for (mutate, field, problem) in cases {
         let mut p = ok;
@@ -609,6 +635,356 @@ fn f32_drive_follows_f64_on_stick_slip() {
         b.step(u as f32).expect("f32 step");
         worst = worst.max((a.x() - f64::from(b.x())).abs());
     }
+    let range = 2.0; // rad, about
+    assert!(worst < 1e-3 * range, "f32 vs f64 position: {worst}");
+}
+
+/// A slider with stiction (kinetic 1, breakaway 2 N) and Stribeck weakening at `vs` [m/s].
+fn stribeck_slider(vs: f64) -> DriveParams {
+    DriveParams {
+        inertia: 1.0,
+        viscous_pos: 0.5,
+        viscous_neg: 0.7,
+        kinetic_pos: 1.0,
+        kinetic_neg: 1.2,
+        breakaway_pos: 2.0,
+        breakaway_neg: 2.5,
+        stribeck_velocity: vs,
+        ..DriveParams::default()
+    }
+}
+
+#[test]
+fn stribeck_breakaway_is_continuous_and_the_friction_then_weakens_to_kinetic() {
+    let vs = 0.01;
+    let p = stribeck_slider(vs);
+    let rate = 1.0; // N/s
+    let mut d: Drive = Drive::new(&p, H, 0.0).expect("valid");
+    let mut n = 0usize;
+    // The ramp breaks it away at the breakaway level, not at the kinetic one.
+    loop {
+        let u = rate * n as f64 * H;
+        d.step(u).expect("step");
+        n += 1;
+        if d.mode() != Mode::Stopped {
+            assert!(
+                u > p.breakaway_pos && u <= p.breakaway_pos + rate * H,
+                "broke away at F = {u}"
+            );
+            break;
+        }
+        assert_eq!(d.x(), 0.0, "moved below breakaway at F = {u}");
+        assert!(n < 3000, "never broke away");
+    }
+    // Just after breakaway the sliding friction is at the breakaway level (continuous with
+    // the static friction that held it; a plain kinetic law would drop to 1 N at once)...
+    let o = d.output();
+    assert!(
+        (o.friction - p.breakaway_pos).abs() < 1e-3,
+        "friction right after breakaway: {}",
+        o.friction
+    );
+    // ... then falls with speed while the force has hardly changed, so the axis accelerates
+    // away (velocity weakening): at v = vs the excess over kinetic is down to exp(-1).
+    let (mut friction_prev, mut seen_vs) = (o.friction, false);
+    while d.v() < 20.0 * vs {
+        let u = rate * n as f64 * H;
+        d.step(u).expect("step");
+        n += 1;
+        assert_eq!(d.mode(), Mode::Positive, "re-stuck at F = {u}");
+        let o = d.output();
+        let v = d.v();
+        let expected = 1.0 + (2.0 - 1.0) * (-(v / vs) * (v / vs)).exp() + 0.5 * v;
+        assert!(
+            (o.friction - expected).abs() < 1e-12,
+            "friction {} vs {expected} at v = {v}",
+            o.friction
+        );
+        if v > 1e-3 && v < 2.0 * vs {
+            // (below 2.6 vs the weakening outweighs the viscous rise)
+            assert!(o.friction < friction_prev, "the friction falls with speed");
+        }
+        if v >= vs && !seen_vs {
+            seen_vs = true;
+            assert!(u < p.breakaway_pos + 0.2, "F = {u} at v = vs");
+            assert!(
+                o.friction < 1.0 + 0.4 + 0.5 * v,
+                "friction {} at v = vs",
+                o.friction
+            );
+            assert!(o.acceleration > 0.5, "accelerates away: {}", o.acceleration);
+        }
+        friction_prev = o.friction;
+        assert!(n < 3000, "never reached 20 vs");
+    }
+    // Far above vs it is the kinetic + viscous law.
+    for _ in 0..500 {
+        d.step(3.0).expect("step");
+        let v = d.v();
+        assert!(v > 20.0 * vs);
+        let f = d.output().friction;
+        assert!(
+            (f - (1.0 + 0.5 * v)).abs() < 1e-9,
+            "friction {f} at v = {v}"
+        );
+    }
+    // Likewise moving negative, with the negative levels.
+    d.set_state(d.x(), -0.5).expect("state");
+    for _ in 0..200 {
+        d.step(-3.0).expect("step");
+        let v = d.v();
+        assert!(v < -20.0 * vs);
+        let f = d.output().friction;
+        assert!(
+            (f - (-1.2 + 0.7 * v)).abs() < 1e-9,
+            "friction {f} at v = {v}"
+        );
+    }
+}
+
+#[test]
+fn stribeck_a_force_between_kinetic_and_breakaway_keeps_a_fast_axis_moving_and_stops_a_slow_one() {
+    // F = 1.5 N: above kinetic (1), below breakaway (2). The friction `1 + exp(-(v/vs)^2) +
+    // 0.5 v` equals F at v ~ 0.83 vs (unstable) and at v = 1 m/s (stable).
+    let vs = 0.01;
+    let p = stribeck_slider(vs);
+    let f = 1.5;
+    let mut fast: Drive = Drive::new(&p, H, 0.0).expect("valid");
+    fast.set_state(0.0, 5.0 * vs).expect("state");
+    let mut slow = fast.clone();
+    slow.set_state(0.0, 0.5 * vs).expect("state");
+    for _ in 0..30_000 {
+        fast.step(f).expect("step");
+        slow.step(f).expect("step");
+    }
+    assert_eq!(fast.mode(), Mode::Positive);
+    assert!((fast.v() - 1.0).abs() < 1e-5, "steady speed {}", fast.v());
+    assert_eq!(slow.mode(), Mode::Stopped, "the slow one stops and sticks");
+    assert!(slow.x() > 0.0 && slow.x() < vs);
+    // Without weakening both reach the steady speed.
+    let plain = DriveParams {
+        stribeck_velocity: 0.0,
+        ..p
+    };
+    let mut d: Drive = Drive::new(&plain, H, 0.0).expect("valid");
+    d.set_state(0.0, 0.5 * vs).expect("state");
+    for _ in 0..30_000 {
+        d.step(f).expect("step");
+    }
+    assert!((d.v() - 1.0).abs() < 1e-5, "no weakening: speed {}", d.v());
+}
+
+/// A geared axis: kinetic 1, breakaway 1.5 N, load friction `mu` of the drive effort.
+fn geared(mu: f64) -> DriveParams {
+    DriveParams {
+        inertia: 2.0,
+        gain: 2.0,
+        kinetic_pos: 1.0,
+        kinetic_neg: 1.0,
+        breakaway_pos: 1.5,
+        breakaway_neg: 1.5,
+        load_friction: mu,
+        ..DriveParams::default()
+    }
+}
+
+#[test]
+fn load_friction_holds_up_to_breakaway_over_one_minus_mu_and_brakes_harder() {
+    let mu = 0.25;
+    let p = geared(mu);
+    let limit = p.breakaway_pos / (1.0 - mu); // 2 N
+    for (force, holds) in [
+        (1.9, true),
+        (limit - 1e-9, true),
+        (limit, true),
+        (limit + 1e-9, false),
+        (2.5, false),
+    ] {
+        for sign in [1.0, -1.0] {
+            let mut d: Drive = Drive::new(&p, H, 0.0).expect("valid");
+            let u = sign * force / p.gain;
+            for _ in 0..1000 {
+                d.step(u).expect("step");
+            }
+            let f = sign * force;
+            if holds {
+                assert_eq!(d.mode(), Mode::Stopped, "moved under F = {f}");
+                assert_eq!(d.x().to_bits(), 0.0f64.to_bits());
+                assert_eq!(d.output().friction, f, "static friction holds");
+            } else {
+                let m = if sign > 0.0 {
+                    Mode::Positive
+                } else {
+                    Mode::Negative
+                };
+                assert_eq!(d.mode(), m, "stuck under F = {f}");
+            }
+        }
+    }
+    // Without load friction 1.9 N breaks it away.
+    let mut d: Drive = Drive::new(&geared(0.0), H, 0.0).expect("valid");
+    d.step(1.9 / 2.0).expect("step");
+    assert_eq!(d.mode(), Mode::Positive);
+
+    // Sliding: a = (F - kinetic - mu |F|) / J, pushing along or braking against the motion.
+    for force in [3.0, -3.0] {
+        let mut d: Drive = Drive::new(&p, H, 0.0).expect("valid");
+        let v0 = 5.0;
+        d.set_state(0.0, v0).expect("state");
+        let a = (force - 1.0 - mu * f64::abs(force)) / p.inertia; // 0.625, -2.375
+        for n in 1..=1000 {
+            d.step(force / p.gain).expect("step");
+            let t = n as f64 * H;
+            assert!(
+                (d.v() - (v0 + a * t)).abs() < 1e-9,
+                "F = {force}, t = {t}: v = {} vs {}",
+                d.v(),
+                v0 + a * t
+            );
+            let o = d.output();
+            assert!(
+                (o.acceleration - a).abs() < 1e-12,
+                "acceleration {}",
+                o.acceleration
+            );
+            assert!((o.friction - (1.0 + mu * f64::abs(force))).abs() < 1e-12);
+        }
+    }
+    // The offset carries no load: moving under the offset alone, the friction is kinetic.
+    let biased = DriveParams { offset: 4.0, ..p };
+    let mut d: Drive = Drive::new(&biased, H, 0.0).expect("valid");
+    d.set_state(0.0, 1.0).expect("state");
+    d.step(0.0).expect("step");
+    assert_eq!(d.output().friction, 1.0);
+    let a = (4.0 - 1.0) / p.inertia;
+    assert!((d.v() - (1.0 + a * H)).abs() < 1e-12, "v = {}", d.v());
+    let v1 = d.v();
+    d.step(1.0).expect("step");
+    assert_eq!(d.output().friction, 1.0 + mu * 2.0);
+    let a = (2.0 + 4.0 - 1.0 - mu * 2.0) / p.inertia;
+    assert!((d.v() - (v1 + a * H)).abs() < 1e-12, "v = {}", d.v());
+}
+
+/// FNV-1a over the bits of `x`, `v`, the mode and `output()` after every step of a ramp with
+/// a sine; also the located events and the stuck steps.
+fn trajectory_hash(p: &DriveParams) -> (u64, u32, usize) {
+    let mut d: Drive = Drive::new(p, H, 0.0).expect("valid");
+    let mut hash = 0xcbf2_9ce4_8422_2325u64;
+    let (mut events, mut stuck) = (0u32, 0usize);
+    let mut eat = |w: u64| {
+        for b in w.to_le_bytes() {
+            hash ^= u64::from(b);
+            hash = hash.wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    for n in 0..20_000 {
+        let t = n as f64 * H;
+        let u = 0.8 * t + 16.0 * (2.0 * std::f64::consts::PI * 1.3 * t).sin();
+        let r = d.step(u).expect("step");
+        let o = d.output();
+        events += u32::from(r.events);
+        stuck += usize::from(d.mode() == Mode::Stopped);
+        for w in [
+            d.x().to_bits(),
+            d.v().to_bits(),
+            d.mode() as u64,
+            u64::from(r.events),
+            o.acceleration.to_bits(),
+            o.friction.to_bits(),
+        ] {
+            eat(w);
+        }
+    }
+    (hash, events, stuck)
+}
+
+#[test]
+fn with_both_effects_off_the_trajectory_bits_are_those_of_the_model_without_them() {
+    // A stick-slip joint with gravity, a dead band and a delay; both new fields at 0.
+    let p = DriveParams {
+        motion: Motion::Rotary,
+        inertia: 0.12,
+        viscous_pos: 0.3,
+        viscous_neg: 0.35,
+        kinetic_pos: 8.0,
+        kinetic_neg: 9.0,
+        breakaway_pos: 10.75,
+        breakaway_neg: 12.0,
+        offset: 0.5,
+        position_force: PositionForce::Pendulum {
+            stiffness: 40.3,
+            center: 0.0,
+        },
+        deadband: 0.05,
+        delay_steps: 3,
+        ..DriveParams::default()
+    };
+    let explicit = DriveParams {
+        stribeck_velocity: 0.0,
+        load_friction: 0.0,
+        ..p
+    };
+    assert_eq!(p.stribeck_velocity, 0.0);
+    assert_eq!(p.load_friction, 0.0);
+    let (h, events, stuck) = trajectory_hash(&p);
+    assert!(
+        events > 5 && stuck > 1000,
+        "{events} events, {stuck} stuck steps"
+    );
+    assert_eq!(h, trajectory_hash(&explicit).0);
+    // Recorded with the model before `stribeck_velocity` and `load_friction` existed
+    // (commit 21144e4): the same operations, the same bits.
+    assert_eq!(h, GOLDEN_BEFORE_FRICTION_EFFECTS, "got {h:#018x}");
+    // And either effect changes them.
+    for q in [
+        DriveParams {
+            stribeck_velocity: 0.05,
+            ..p
+        },
+        DriveParams {
+            load_friction: 0.1,
+            ..p
+        },
+    ] {
+        assert_ne!(trajectory_hash(&q).0, h);
+    }
+}
+
+/// [`trajectory_hash`] of the joint of the test above, from the model at commit 21144e4
+/// (before the two friction effects), computed there with the same function.
+const GOLDEN_BEFORE_FRICTION_EFFECTS: u64 = 0x2bab_7c9b_bc0c_1ecb;
+
+#[test]
+fn f32_drive_follows_f64_with_stribeck_and_load_friction() {
+    let p = DriveParams {
+        motion: Motion::Rotary,
+        inertia: 0.1,
+        viscous_pos: 0.05,
+        viscous_neg: 0.05,
+        kinetic_pos: 6.0,
+        kinetic_neg: 6.0,
+        breakaway_pos: 10.0,
+        breakaway_neg: 10.0,
+        position_force: PositionForce::Pendulum {
+            stiffness: 40.0,
+            center: 0.0,
+        },
+        stribeck_velocity: 0.05,
+        load_friction: 0.1,
+        ..DriveParams::default()
+    };
+    let mut a: Drive<f64> = Drive::new(&p, H, 0.0).expect("valid");
+    let mut b: Drive<f32> = Drive::new(&p, H, 0.0).expect("valid");
+    let (mut worst, mut slips) = (0.0f64, 0usize);
+    for n in 0..20_000 {
+        let u = 30.0 * (n as f64 * H * 0.5).sin();
+        let before = a.mode();
+        a.step(u).expect("f64 step");
+        b.step(u as f32).expect("f32 step");
+        slips += usize::from(before == Mode::Stopped && a.mode() != Mode::Stopped);
+        worst = worst.max((a.x() - f64::from(b.x())).abs());
+    }
+    assert!(slips >= 2, "slips: {slips}");
     let range = 2.0; // rad, about
     assert!(worst < 1e-3 * range, "f32 vs f64 position: {worst}");
 }
