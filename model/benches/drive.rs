@@ -8,6 +8,9 @@
 //! - `sliding`: always moving (spring, viscous and kinetic friction), no event.
 //! - `stuck`: at rest below breakaway the whole run.
 //! - `sliding_f32`: `sliding` in f32.
+//! - `sliding_stribeck_load`: `sliding` with Stribeck weakening and load friction (one `exp`
+//!   per evaluation, the step's levels once per step): the extra cost of the two effects.
+//! - `stick_slip_stribeck_load`: `stick_slip` with both effects.
 
 use crane_model::{Drive, DriveParams, Motion, PositionForce};
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
@@ -76,6 +79,15 @@ fn bench(c: &mut Criterion) {
     d.set_state(0.0, 1.0).expect("state");
     g.bench_function("sliding", |b| b.iter(|| run(&d, &push)));
 
+    let both = DriveParams {
+        stribeck_velocity: 0.05,
+        load_friction: 0.1,
+        ..slide
+    };
+    let mut d: Drive = Drive::new(&both, H, 0.0).expect("valid");
+    d.set_state(0.0, 1.0).expect("state");
+    g.bench_function("sliding_stribeck_load", |b| b.iter(|| run(&d, &push)));
+
     let push32: Vec<f32> = push.iter().map(|&v| v as f32).collect();
     let mut d32: Drive<f32> = Drive::new(&slide, H, 0.0).expect("valid");
     d32.set_state(0.0, 1.0).expect("state");
@@ -84,6 +96,14 @@ fn bench(c: &mut Criterion) {
     let rest = inputs(|t| 5.0 * (t * 3.0).sin());
     let d: Drive = Drive::new(&p, H, 0.0).expect("valid");
     g.bench_function("stuck", |b| b.iter(|| run(&d, &rest)));
+
+    let joint_both = DriveParams {
+        stribeck_velocity: 0.05,
+        load_friction: 0.1,
+        ..p
+    };
+    let d: Drive = Drive::new(&joint_both, H, 0.0).expect("valid");
+    g.bench_function("stick_slip_stribeck_load", |b| b.iter(|| run(&d, &ramp)));
     g.finish();
 
     // What the runs contain (printed once, so the figures can be read against it).
