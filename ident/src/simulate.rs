@@ -5,7 +5,12 @@
 //!
 //! The simulator's step is the sample period divided into `n` equal sub-steps, with
 //! `h = dt / n <= min(1 ms, sqrt(J / k) / 4, J / (4 D))` (RK4 well inside its stability limit
-//! for the stiffest linear part of the model), `n <= MAX_SUBSTEPS`.
+//! for the stiffest linear part of the model), `n <= MAX_SUBSTEPS`. `D` is the larger viscous
+//! coefficient or, with Stribeck weakening (`vs > 0`), the steepest slope of the weakening
+//! friction if larger, `0.86 (breakaway - kinetic) / vs` (the largest of
+//! `|d/dv (B - C) exp(-(v / vs)^2)|` is `sqrt(2 / e) (B - C) / vs`); the load friction
+//! (constant over a step) adds nothing. Every parameter set the model takes, the two friction
+//! effects included, is simulated as given (`DriveParams` is passed through unchanged).
 
 use crane_model::drive::{Drive, DriveParams, DriveStepError, PositionForce};
 
@@ -39,7 +44,11 @@ pub fn substeps(p: &DriveParams, dt: f64) -> usize {
             stiffness
         }
     };
-    let d = p.viscous_pos.max(p.viscous_neg);
+    let mut d = p.viscous_pos.max(p.viscous_neg);
+    if p.stribeck_velocity > 0.0 {
+        let excess = (p.breakaway_pos - p.kinetic_pos).max(p.breakaway_neg - p.kinetic_neg);
+        d = d.max(0.86 * excess / p.stribeck_velocity);
+    }
     let mut h = 1e-3f64;
     if k > 0.0 {
         h = h.min(0.25 * (p.inertia / k).sqrt());
@@ -115,6 +124,35 @@ mod tests {
         let p = DriveParams::default();
         let x = simulate_drive(&p, 0.0, 0.0, 0.01, &[1.0; 101]).unwrap();
         assert!((x[100] - 0.5).abs() < 1e-9, "{}", x[100]);
+    }
+
+    #[test]
+    fn the_friction_effects_reach_the_model() {
+        // 1 kg, kinetic 1 N, breakaway 2 N, pushed with 3 N for 1 s from rest.
+        let base = DriveParams {
+            kinetic_pos: 1.0,
+            kinetic_neg: 1.0,
+            breakaway_pos: 2.0,
+            breakaway_neg: 2.0,
+            ..DriveParams::default()
+        };
+        let x = |p: &DriveParams| simulate_drive(p, 0.0, 0.0, 0.01, &[3.0; 101]).unwrap()[100];
+        // Plain: a = 2 m/s^2; load friction 0.2: a = (3 - 1 - 0.6) = 1.4 m/s^2.
+        assert!((x(&base) - 1.0).abs() < 1e-9, "{}", x(&base));
+        let loaded = DriveParams {
+            load_friction: 0.2,
+            ..base
+        };
+        assert!((x(&loaded) - 0.7).abs() < 1e-9, "{}", x(&loaded));
+        // Stribeck weakening: the friction starts at breakaway, so it lags the plain run a
+        // little; and the weakening slope shortens the step.
+        let weak = DriveParams {
+            stribeck_velocity: 0.002,
+            ..base
+        };
+        let xw = x(&weak);
+        assert!(xw < x(&base) - 1e-4 && xw > x(&base) - 0.05, "{xw}");
+        assert!(substeps(&weak, 0.01) > substeps(&base, 0.01));
     }
 
     #[test]
