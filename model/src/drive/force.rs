@@ -96,24 +96,21 @@ impl<R: Real> Coeffs<R> {
         }
     }
 
-    /// The coefficients of a step whose drive effort is `fd = gain * deadband(u)` [N or N m]:
-    /// with load friction each dry level grows by `L = load * |fd|` (`Cp + L`, `Cn + L`,
-    /// `Bp + L`, `Bn + L`, one rounding each); without, `None` (the levels are the
-    /// parameters', no operation added).
+    /// The coefficients of a step whose drive effort is `fd = gain * deadband(u)` [N or N m]
+    /// under load friction (`load_on`): each dry level grows by `L = load * |fd|` (`Cp + L`,
+    /// `Cn + L`, `Bp + L`, `Bn + L`, one rounding each). Without load friction the step uses
+    /// the parameters' levels as they are (no operation added; the caller does not call this).
     #[inline]
-    pub(crate) fn loaded(&self, fd: R) -> Option<Self> {
-        if !self.load_on {
-            return None;
-        }
+    pub(crate) fn loaded(&self, fd: R) -> Self {
         let mag = if fd < R::ZERO { -fd } else { fd };
         let l = self.load * mag;
-        Some(Coeffs {
+        Coeffs {
             kinetic_pos: self.kinetic_pos + l,
             kinetic_neg: self.kinetic_neg + l,
             breakaway_pos: self.breakaway_pos + l,
             breakaway_neg: self.breakaway_neg + l,
             ..*self
-        })
+        }
     }
 
     /// Holding force at `x` under the applied force `f`: `f - position_force(x)`.

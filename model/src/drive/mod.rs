@@ -203,8 +203,13 @@ impl<R: Real> Drive<R> {
             return Err(DriveStepError::ForceNotFinite);
         }
         // The step's coefficients: the parameters', or with the load share in the levels.
-        let loaded = self.c.loaded(fd);
-        let c = loaded.as_ref().unwrap_or(&self.c);
+        let loaded;
+        let c = if self.c.load_on {
+            loaded = self.c.loaded(fd);
+            &loaded
+        } else {
+            &self.c
+        };
         let px = if self.mode == Mode::Stopped {
             Some(match self.resting_force {
                 Some(p) => p,
@@ -214,7 +219,12 @@ impl<R: Real> Drive<R> {
             None
         };
         if let Some(p) = px {
-            if step::release(c, self.x, self.v, f - p).0 == Mode::Stopped {
+            let hold = f - p;
+            // No breakaway guard open (the usual resting step: no friction evaluation), or a
+            // release that its acceleration check refuses.
+            let held = step::breakaway(c, self.x, hold).is_none()
+                || step::release(c, self.x, self.v, hold).0 == Mode::Stopped;
+            if held {
                 // Held for the whole step (the holding force is constant over it): the state
                 // stays as it is, bit for bit; what `step::step` would do, without its set-up.
                 self.commit_input(f, fd, u, k);
@@ -291,8 +301,13 @@ impl<R: Real> Drive<R> {
     /// Forces and acceleration at the current state with the last applied force and drive
     /// effort (0 before the first step).
     pub fn output(&self) -> DriveOutput<R> {
-        let loaded = self.c.loaded(self.effort);
-        let c = loaded.as_ref().unwrap_or(&self.c);
+        let loaded;
+        let c = if self.c.load_on {
+            loaded = self.c.loaded(self.effort);
+            &loaded
+        } else {
+            &self.c
+        };
         let position_force = c.restoring.at(self.x);
         let friction = match self.mode {
             Mode::Stopped => self.applied - position_force,

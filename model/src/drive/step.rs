@@ -62,6 +62,27 @@ pub(crate) fn resolve<R: Real>(c: &Coeffs<R>, x: R, v: R, mode: Mode, f: R) -> (
 /// acceleration (0 when it stays stopped).
 #[inline]
 pub(crate) fn release<R: Real>(c: &Coeffs<R>, x: R, v: R, hold: R) -> (Mode, R) {
+    let Some(dir) = breakaway(c, x, hold) else {
+        return (Mode::Stopped, R::ZERO);
+    };
+    // The same bits as `c.accel(x, v, dir, f)`: `hold` is `c.hold(x, f)`.
+    let a = (hold - c.friction(dir, v)) / c.inertia;
+    let consistent = match dir {
+        Mode::Positive => a > R::ZERO,
+        _ => a < R::ZERO,
+    };
+    if consistent {
+        (dir, a)
+    } else {
+        (Mode::Stopped, R::ZERO)
+    }
+}
+
+/// The guards of [`release`] alone: the direction a stopped axis at `x` with holding force
+/// `hold` would break away in, before the acceleration check; `None`: it holds (and
+/// [`release`] returns `Stopped`), decided without evaluating the friction.
+#[inline]
+pub(crate) fn breakaway<R: Real>(c: &Coeffs<R>, x: R, hold: R) -> Option<Mode> {
     let mut best: Option<(Mode, R)> = None;
     if x < c.max {
         let m = hold - c.breakaway_pos;
@@ -79,20 +100,7 @@ pub(crate) fn release<R: Real>(c: &Coeffs<R>, x: R, v: R, hold: R) -> (Mode, R) 
             best = Some((Mode::Negative, m));
         }
     }
-    let Some((dir, _)) = best else {
-        return (Mode::Stopped, R::ZERO);
-    };
-    // The same bits as `c.accel(x, v, dir, f)`: `hold` is `c.hold(x, f)`.
-    let a = (hold - c.friction(dir, v)) / c.inertia;
-    let consistent = match dir {
-        Mode::Positive => a > R::ZERO,
-        _ => a < R::ZERO,
-    };
-    if consistent {
-        (dir, a)
-    } else {
-        (Mode::Stopped, R::ZERO)
-    }
+    best.map(|(dir, _)| dir)
 }
 
 /// One RK4 step of length `dt` in a moving `mode` from `(x, v)` with first stage `a1`.
