@@ -17,10 +17,12 @@
 //!
 //! The two optional friction effects keep these counts and make an evaluation dearer:
 //! Stribeck weakening adds to every moving evaluation one `exp` (libm), a division, two
-//! multiplications, a subtraction and an addition (the usual moving step: 4 `exp`); load
-//! friction adds once per step, before any evaluation, an absolute value, a multiplication
-//! and four additions (the step's dry levels in a copy of the coefficients,
-//! `Coeffs::loaded`), nothing per evaluation. With both off no operation is added.
+//! multiplications, a negation, a subtraction and an addition (the usual moving step: 4
+//! `exp`); load friction adds once per step, before any evaluation, an absolute value, a
+//! multiplication and four additions (the step's dry levels in a copy of the coefficients,
+//! `Coeffs::loaded`), nothing per evaluation. With both off no floating-point operation is
+//! added (a flag test per evaluation and per step). A resting step decides its breakaway
+//! guards before any friction evaluation, so it evaluates no `exp` while it holds.
 
 use super::force::Coeffs;
 use crate::modes::Mode;
