@@ -8,7 +8,8 @@
 //! Units: position m or rad, force N or N m, inertia kg or kg m^2, time s. Positive velocity
 //! is increasing position; friction magnitudes are >= 0. The optional Stribeck velocity `vs`
 //! and load friction `mu` (0: off) follow the contract's "Friction of a moving axis" and
-//! "Friction levels of a step".
+//! "Friction levels of a step"; the optional bump `(xc, w, a)` (none, or `a = 0`: off) its
+//! "Friction levels at a position".
 
 // Spelled like the contract's pseudo-code.
 #![allow(clippy::assign_op_pattern, clippy::manual_clamp)]
@@ -52,6 +53,18 @@ pub enum RefPositionForce {
     },
 }
 
+/// The localised friction bump of the contract: `a * (1 - s^2)^2` for `|s| < 1`,
+/// `s = (x - xc) / w`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RefBump {
+    /// Centre `xc` [m or rad].
+    pub xc: f64,
+    /// Half-width `w` [m or rad] (> 0).
+    pub w: f64,
+    /// Amplitude `a` [N or N m].
+    pub a: f64,
+}
+
 /// Parameters, named as in the contract.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RefDriveParams {
@@ -87,10 +100,12 @@ pub struct RefDriveParams {
     pub vs: f64,
     /// Load friction coefficient `mu` (0: none).
     pub mu: f64,
+    /// Localised friction bump (`None`: none).
+    pub bump: Option<RefBump>,
 }
 
 /// The dry friction levels of one step: `Cp'`, `Cn'`, `Bp'`, `Bn'` of the contract (the
-/// parameters' own without load friction).
+/// parameters' own without load friction), or those at a position (`Cp''`... with the bump).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Levels {
     /// `Cp'`.
@@ -276,8 +291,34 @@ impl RefDrive {
         }
     }
 
-    /// Friction `f` of a moving axis (contract: `Sp + Dp*v` / `-Sn + Dn*v`).
-    fn friction(&self, lv: &Levels, mode: DriveMode, v: f64) -> f64 {
+    /// The contract's levels at position `x` from the step's levels `lv`: with a bump of
+    /// non-zero amplitude and `-1 < s < 1`, each level plus `bx = (a * t) * t`,
+    /// `t = 1 - s * s`, `s = (x - xc) / w`; else `lv` itself.
+    pub fn levels_at(&self, lv: &Levels, x: f64) -> Levels {
+        let Some(bump) = self.prm.bump else {
+            return *lv;
+        };
+        if bump.a == 0.0 {
+            return *lv;
+        }
+        let s = (x - bump.xc) / bump.w;
+        if !(s > -1.0 && s < 1.0) {
+            return *lv;
+        }
+        let t = 1.0 - s * s;
+        let bx = bump.a * t * t;
+        Levels {
+            cp: lv.cp + bx,
+            cn: lv.cn + bx,
+            bp: lv.bp + bx,
+            bn: lv.bn + bx,
+        }
+    }
+
+    /// Friction `f` of an axis moving at `(x, v)` (contract: `Sp + Dp*v` / `-Sn + Dn*v`, with
+    /// the levels at `x`).
+    fn friction(&self, lv: &Levels, mode: DriveMode, x: f64, v: f64) -> f64 {
+        let lv = &self.levels_at(lv, x);
         let vs = self.prm.vs;
         // S = C' + (B' - C') * exp(-(r*r)), r = v / vs; S = C' without Stribeck.
         let stribeck = |c: f64, b: f64| -> f64 {
@@ -300,7 +341,7 @@ impl RefDrive {
         if mode == DriveMode::Stopped {
             return 0.0;
         }
-        let fr = self.friction(lv, mode, v);
+        let fr = self.friction(lv, mode, x, v);
         (self.hold(x, f) - fr) / self.prm.i
     }
 
@@ -309,13 +350,14 @@ impl RefDrive {
             return (mode, self.acc(lv, x, v, mode, f));
         }
         let h = self.hold(x, f);
+        let at = self.levels_at(lv, x);
         let up = if x < self.prm.max {
-            Some(h - lv.bp)
+            Some(h - at.bp)
         } else {
             None
         };
         let down = if x > self.prm.min {
-            Some(-lv.bn - h)
+            Some(-at.bn - h)
         } else {
             None
         };
@@ -500,7 +542,7 @@ impl RefDrive {
         let lv = self.levels(self.fd_last);
         let fr = match self.mode {
             DriveMode::Stopped => self.f_last - p,
-            m => self.friction(&lv, m, self.v),
+            m => self.friction(&lv, m, self.x, self.v),
         };
         [
             self.acc(&lv, self.x, self.v, self.mode, self.f_last),

@@ -1,15 +1,16 @@
 //! The drive model (`crane_model::Drive<f64>`) must reproduce the independent reference
 //! (`host_tests::drive_reference`) bit for bit: position, velocity, mode, time, the step
 //! report and `output()` after every step (accepted or rejected with the same error), for
-//! random valid parameters (with and without stiction, Stribeck weakening and load friction,
-//! spring and pendulum, dead band, delay, end stops) and random inputs (holds, ramps, steps,
+//! random valid parameters (with and without stiction, Stribeck weakening, load friction and
+//! a localised friction bump or dip, spring and pendulum, dead band, delay, end stops) and random inputs (holds, ramps, steps,
 //! sines, noise, bad values).
 
 use crane_model::{
-    Drive, DriveParams, DriveStepError, Mode, Motion, PositionForce, MAX_DRIVE_DELAY_STEPS,
+    Drive, DriveParams, DriveStepError, LocalFriction, Mode, Motion, PositionForce,
+    MAX_DRIVE_DELAY_STEPS,
 };
 use host_tests::drive_reference::{
-    DriveMode, RefDrive, RefDriveError, RefDriveParams, RefPositionForce,
+    DriveMode, RefBump, RefDrive, RefDriveError, RefDriveParams, RefPositionForce,
 };
 use proptest::prelude::*;
 
@@ -46,6 +47,18 @@ fn to_ref(p: &DriveParams) -> RefDriveParams {
         max: p.max,
         vs: p.stribeck_velocity,
         mu: p.load_friction,
+        bump: match p.local_friction {
+            LocalFriction::None => None,
+            LocalFriction::Bump {
+                center,
+                half_width,
+                amplitude,
+            } => Some(RefBump {
+                xc: center,
+                w: half_width,
+                a: amplitude,
+            }),
+        },
     }
 }
 
@@ -91,6 +104,19 @@ fn params_strategy() -> impl Strategy<Value = DriveParams> {
         prop_oneof![1 => Just(0.0), 1 => 0.002f64..0.5],
         prop_oneof![1 => Just(0.0), 1 => 0.0f64..0.9],
     );
+    // Localised friction in half of the cases: the centre as a fraction of the range the
+    // axis starts in (so that it is crossed), the half-width, and the amplitude as a fraction
+    // of the deepest dip allowed (down to `-min(kinetic)`, exactly that in some cases: a
+    // level that reaches 0) or of 6 N above.
+    let local = prop_oneof![
+        1 => Just(None),
+        1 => (
+            0.0f64..1.0,
+            0.005f64..0.3,
+            prop_oneof![1 => Just(-1.0), 2 => -1.0f64..0.0, 4 => 0.0f64..1.0],
+        )
+            .prop_map(Some),
+    ];
     let limits = prop_oneof![
         Just((f64::NEG_INFINITY, f64::INFINITY)),
         (0.01f64..0.5).prop_map(|b| (f64::NEG_INFINITY, b)),
@@ -106,7 +132,7 @@ fn params_strategy() -> impl Strategy<Value = DriveParams> {
             prop_oneof![Just(0usize), 0..=MAX_DRIVE_DELAY_STEPS],
         ),
         limits,
-        extra,
+        (extra, local),
     )
         .prop_map(
             |(
@@ -115,8 +141,26 @@ fn params_strategy() -> impl Strategy<Value = DriveParams> {
                 pf,
                 (d, delay),
                 (lo, hi),
-                (vs, mu),
+                ((vs, mu), local),
             )| {
+                let local_friction = match local {
+                    None => LocalFriction::None,
+                    Some((at, half_width, frac)) => {
+                        // The start range of `run`.
+                        let a = if lo.is_finite() { lo } else { -0.5 };
+                        let b = if hi.is_finite() { hi } else { 0.5 };
+                        let amplitude = if frac < 0.0 {
+                            -frac * -cp.min(cn)
+                        } else {
+                            6.0 * frac
+                        };
+                        LocalFriction::Bump {
+                            center: a + (b - a) * at,
+                            half_width,
+                            amplitude,
+                        }
+                    }
+                };
                 DriveParams {
                     motion: if rot { Motion::Rotary } else { Motion::Linear },
                     inertia,
@@ -135,6 +179,7 @@ fn params_strategy() -> impl Strategy<Value = DriveParams> {
                     max: hi,
                     stribeck_velocity: vs,
                     load_friction: mu,
+                    local_friction,
                 }
             },
         )
@@ -305,7 +350,8 @@ proptest! {
 /// The random cases exercise what they claim: over fixed seeds of the same generators, the
 /// drive sticks, slips, reverses through `Stopped`, hits end stops and rejects bad inputs,
 /// and the Stribeck and load terms are on in a good share of the cases (the Stribeck one with
-/// stiction, on steps that move slower than `2 vs`, where its weakening is not negligible).
+/// stiction, on steps that move slower than `2 vs`, where its weakening is not negligible), and
+/// so is a bump that the axis crosses and rests on.
 #[test]
 fn random_programs_cover_sticking_slipping_stops_and_rejections() {
     use proptest::strategy::ValueTree;
@@ -315,6 +361,8 @@ fn random_programs_cover_sticking_slipping_stops_and_rejections() {
         (0u64, 0u64, 0u64, 0u64, 0u64);
     let (mut stribeck, mut stribeck_slow_steps, mut load, mut loaded_steps) =
         (0u64, 0u64, 0u64, 0u64);
+    let (mut bumps, mut dips, mut in_bump_moving, mut in_bump_stuck, mut crossings) =
+        (0u64, 0u64, 0u64, 0u64, 0u64);
     for _ in 0..64 {
         let p = params_strategy()
             .new_tree(&mut runner)
@@ -331,7 +379,18 @@ fn random_programs_cover_sticking_slipping_stops_and_rejections() {
             && (p.breakaway_pos > p.kinetic_pos || p.breakaway_neg > p.kinetic_neg);
         stribeck += u64::from(weakens);
         load += u64::from(p.load_friction > 0.0);
+        let inside = |x: f64| match p.local_friction {
+            LocalFriction::Bump {
+                center, half_width, ..
+            } => (x - center).abs() < half_width,
+            LocalFriction::None => false,
+        };
+        if let LocalFriction::Bump { amplitude, .. } = p.local_friction {
+            bumps += 1;
+            dips += u64::from(amplitude < 0.0);
+        }
         let mut m: Drive = Drive::new(&p, 1e-3, 0.0f64.clamp(p.min, p.max)).expect("valid");
+        let mut was_inside = inside(m.x());
         for u in inputs(&pieces, 1e-3) {
             match m.step(u) {
                 Ok(r) => events += u64::from(r.events),
@@ -350,6 +409,16 @@ fn random_programs_cover_sticking_slipping_stops_and_rejections() {
             if p.load_friction > 0.0 && m.output().applied != p.offset {
                 loaded_steps += 1;
             }
+            let now_inside = inside(m.x());
+            if now_inside {
+                if moving {
+                    in_bump_moving += 1;
+                } else {
+                    in_bump_stuck += 1;
+                }
+            }
+            crossings += u64::from(now_inside != was_inside);
+            was_inside = now_inside;
         }
     }
     eprintln!("events {events}, stuck steps {stuck_steps}, at a stop {at_stop}, rejected {rejected}, stiction cases {stiction}");
@@ -364,6 +433,17 @@ fn random_programs_cover_sticking_slipping_stops_and_rejections() {
         stribeck_slow_steps > 1000,
         "moving steps below 2 vs: {stribeck_slow_steps}"
     );
+    eprintln!("bump cases {bumps} (dips {dips}): steps inside moving {in_bump_moving}, stuck {in_bump_stuck}, entries and exits {crossings}");
     assert!(load > 16, "load-friction cases: {load}");
+    assert!(bumps > 16 && dips > 4, "bump cases: {bumps}, dips {dips}");
+    assert!(
+        in_bump_moving > 10_000,
+        "moving steps in a bump: {in_bump_moving}"
+    );
+    assert!(
+        in_bump_stuck > 1000,
+        "stuck steps in a bump: {in_bump_stuck}"
+    );
+    assert!(crossings > 30, "bump entries and exits: {crossings}");
     assert!(loaded_steps > 10_000, "loaded steps: {loaded_steps}");
 }

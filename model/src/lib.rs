@@ -49,8 +49,8 @@ pub mod state;
 
 pub use crane::{hangs, Config, Crane, FrictionLaw, Output, StepError, MIN_HANG, U_MAX};
 pub use drive::{
-    Drive, DriveOutput, DriveParams, DriveReport, DriveStepError, Motion, PositionForce,
-    DRIVE_MAX_SEGMENTS, MAX_DRIVE_DELAY_STEPS,
+    Drive, DriveOutput, DriveParams, DriveReport, DriveStepError, LocalFriction, Motion,
+    PositionForce, DRIVE_MAX_SEGMENTS, MAX_DRIVE_DELAY_STEPS,
 };
 pub use dynamics::{Coeffs, Eval, Law};
 pub use extensions::{Axis, Bump, Direction, Extensions, Stiction, MAX_BUMPS, MAX_DELAY_STEPS};

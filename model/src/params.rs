@@ -137,6 +137,9 @@ pub enum Problem {
     NotANumber,
     /// Must be < 1 (e.g. a load-dependent friction coefficient).
     NotBelowOne,
+    /// Would make a friction level negative somewhere (e.g. a localised dip deeper than a
+    /// dry level).
+    LevelBelowZero,
 }
 
 /// A rejected parameter, configuration or initial-state field.
@@ -169,6 +172,9 @@ impl fmt::Display for Error {
             Problem::BelowKinetic => "must be >= the kinetic friction of its direction",
             Problem::NotANumber => "must not be NaN",
             Problem::NotBelowOne => "must be < 1",
+            Problem::LevelBelowZero => {
+                "makes a friction level negative (every dry level plus it must be >= 0)"
+            }
         };
         write!(f, "`{}` {} (got {})", self.field, what, self.value)
     }

@@ -46,6 +46,7 @@ pub fn problem_name(p: Problem) -> &'static str {
         Problem::BelowKinetic => "below_kinetic",
         Problem::NotANumber => "not_a_number",
         Problem::NotBelowOne => "not_below_one",
+        Problem::LevelBelowZero => "level_below_zero",
     }
 }
 

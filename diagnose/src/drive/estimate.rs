@@ -19,7 +19,7 @@
 //! simulation scores.
 
 use super::prep::{motions, onset, Prepared, Thresholds};
-use crane_model::drive::{DriveParams, Motion, PositionForce};
+use crane_model::drive::{DriveParams, LocalFriction, Motion, PositionForce};
 use crane_model::extensions::deadband;
 use std::fmt;
 
@@ -438,6 +438,7 @@ pub fn estimate(
         max: f64::INFINITY,
         stribeck_velocity: 0.0,
         load_friction: 0.0,
+        local_friction: LocalFriction::None,
     };
     Ok(Estimate {
         params,

@@ -1,10 +1,10 @@
 //! Forces of the drive: the position force, friction per mode (with the optional Stribeck
-//! weakening and load-dependent friction), and the acceleration.
+//! weakening, load-dependent and localised friction), and the acceleration.
 //!
 //! The operation order of every expression is the contract of `NUMERICS.md` ("Single-axis
 //! drive"); the reference in `host-tests/src/drive_reference.rs` computes the same bits.
 
-use super::params::{DriveParams, PositionForce};
+use super::params::{DriveParams, LocalFriction, PositionForce};
 use crate::modes::Mode;
 use crate::real::Real;
 
@@ -42,6 +42,53 @@ impl<R: Real> Restoring<R> {
     }
 }
 
+/// The localised friction bump `b(x)` in the model's scalar type (see
+/// [`LocalFriction::Bump`]); all zero when there is none.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Bump<R> {
+    /// Centre [m or rad].
+    pub(crate) center: R,
+    /// Half-width of the support [m or rad] (> 0).
+    pub(crate) half_width: R,
+    /// Peak change of the dry levels [N or N m].
+    pub(crate) amplitude: R,
+}
+
+impl<R: Real> Bump<R> {
+    fn new(l: LocalFriction) -> Self {
+        match l {
+            LocalFriction::None => Bump {
+                center: R::ZERO,
+                half_width: R::ONE,
+                amplitude: R::ZERO,
+            },
+            LocalFriction::Bump {
+                center,
+                half_width,
+                amplitude,
+            } => Bump {
+                center: R::from_f64(center),
+                half_width: R::from_f64(half_width),
+                amplitude: R::from_f64(amplitude),
+            },
+        }
+    }
+}
+
+impl<R: Real> Bump<R> {
+    /// `b(x)` inside the support, `None` outside (see [`Coeffs::bump_at`]).
+    #[inline]
+    fn at(&self, x: R) -> Option<R> {
+        let s = (x - self.center) / self.half_width;
+        if s > -R::ONE && s < R::ONE {
+            let t = R::ONE - s * s;
+            Some(self.amplitude * t * t)
+        } else {
+            None
+        }
+    }
+}
+
 /// Validated parameters in the model's scalar type.
 ///
 /// The four dry-friction levels are the parameters' own in [`Drive`](super::Drive)'s copy;
@@ -70,6 +117,10 @@ pub(crate) struct Coeffs<R> {
     pub(crate) load: R,
     /// `load > 0` in `R`.
     pub(crate) load_on: bool,
+    /// Localised friction; used only when `bump_on`.
+    pub(crate) bump: Bump<R>,
+    /// A bump whose amplitude is not 0 in `R` (a zero amplitude adds nothing: off).
+    pub(crate) bump_on: bool,
 }
 
 impl<R: Real> Coeffs<R> {
@@ -93,6 +144,8 @@ impl<R: Real> Coeffs<R> {
             stribeck_on: R::from_f64(p.stribeck_velocity) > R::ZERO,
             load: R::from_f64(p.load_friction),
             load_on: R::from_f64(p.load_friction) > R::ZERO,
+            bump: Bump::new(p.local_friction),
+            bump_on: Bump::<R>::new(p.local_friction).amplitude != R::ZERO,
         }
     }
 
@@ -119,12 +172,52 @@ impl<R: Real> Coeffs<R> {
         f - self.restoring.at(x)
     }
 
-    /// Dry friction magnitude [N or N m] of an axis moving at `v` between the `kinetic` and
-    /// `breakaway` levels of its direction: `kinetic + (breakaway - kinetic) * exp(-(x * x))`
-    /// with `x = v / stribeck` (libm `exp`, one evaluation); `kinetic` itself, no operation,
-    /// without Stribeck weakening.
+    /// The localised friction at `x` [N or N m]: `Some(amplitude * t * t)` with
+    /// `t = 1 - s * s`, `s = (x - center) / half_width`, where `-1 < s < 1` (each operation
+    /// left to right, one rounding each: the crane's bump kernel); `None` (nothing to add)
+    /// outside the support and, with no evaluation, when there is no bump (`bump_on`).
     #[inline]
-    fn dry(&self, kinetic: R, breakaway: R, v: R) -> R {
+    pub(crate) fn bump_at(&self, x: R) -> Option<R> {
+        if !self.bump_on {
+            return None;
+        }
+        self.bump.at(x)
+    }
+
+    /// [`Coeffs::bump_at`] in a step compiled for `BUMP == bump_on`: `false` is `None` with no
+    /// operation and no flag test (the step without localised friction is the code it was
+    /// before the bump existed).
+    #[inline]
+    pub(crate) fn local<const BUMP: bool>(&self, x: R) -> Option<R> {
+        if BUMP {
+            self.bump.at(x)
+        } else {
+            None
+        }
+    }
+
+    /// The breakaway levels `(Bp, Bn)` [N or N m] at a position whose localised friction is
+    /// `b` ([`Coeffs::bump_at`]): `(breakaway_pos + b, breakaway_neg + b)`, or the levels of
+    /// `self` as they are (no operation) when `b` is `None`.
+    #[inline]
+    pub(crate) fn breakaway_at(&self, b: Option<R>) -> (R, R) {
+        match b {
+            Some(b) => (self.breakaway_pos + b, self.breakaway_neg + b),
+            None => (self.breakaway_pos, self.breakaway_neg),
+        }
+    }
+
+    /// Dry friction magnitude [N or N m] of an axis moving at `v` between the `kinetic` and
+    /// `breakaway` levels of its direction, first raised by the localised friction `b` when
+    /// it is `Some` (`kinetic + b`, `breakaway + b`):
+    /// `kinetic + (breakaway - kinetic) * exp(-(x * x))` with `x = v / stribeck` (libm `exp`,
+    /// one evaluation); `kinetic` itself, no operation, without Stribeck weakening.
+    #[inline]
+    fn dry(&self, kinetic: R, breakaway: R, b: Option<R>, v: R) -> R {
+        let (kinetic, breakaway) = match b {
+            Some(b) => (kinetic + b, breakaway + b),
+            None => (kinetic, breakaway),
+        };
         if !self.stribeck_on {
             return kinetic;
         }
@@ -132,30 +225,38 @@ impl<R: Real> Coeffs<R> {
         kinetic + (breakaway - kinetic) * (-(x * x)).exp()
     }
 
-    /// Friction of a moving axis [N or N m], the term subtracted in the equation of motion:
-    /// `Sp + viscous_pos * v` (Positive), `-Sn + viscous_neg * v` (Negative), with the dry
-    /// magnitudes `Sp`, `Sn` of `dry` (`kinetic_pos`, `kinetic_neg` without Stribeck
-    /// weakening); 0 when stopped (the holding force is then the friction, see `output`).
+    /// Friction of an axis moving at `(x, v)` [N or N m], the term subtracted in the
+    /// equation of motion: `Sp + viscous_pos * v` (Positive), `-Sn + viscous_neg * v`
+    /// (Negative), with the dry magnitudes `Sp`, `Sn` of `dry` at `x` (`kinetic_pos`,
+    /// `kinetic_neg` without Stribeck weakening and localised friction); 0 when stopped (the
+    /// holding force is then the friction, see `output`).
     #[inline]
-    pub(crate) fn friction(&self, mode: Mode, v: R) -> R {
+    pub(crate) fn friction(&self, mode: Mode, x: R, v: R) -> R {
+        self.friction_with(mode, self.bump_at(x), v)
+    }
+
+    /// [`Coeffs::friction`] with the localised friction `b` at the position already known
+    /// (`bump_at(x)`).
+    #[inline]
+    pub(crate) fn friction_with(&self, mode: Mode, b: Option<R>, v: R) -> R {
         match mode {
             Mode::Positive => {
-                self.dry(self.kinetic_pos, self.breakaway_pos, v) + self.viscous_pos * v
+                self.dry(self.kinetic_pos, self.breakaway_pos, b, v) + self.viscous_pos * v
             }
             Mode::Negative => {
-                -self.dry(self.kinetic_neg, self.breakaway_neg, v) + self.viscous_neg * v
+                -self.dry(self.kinetic_neg, self.breakaway_neg, b, v) + self.viscous_neg * v
             }
             Mode::Stopped => R::ZERO,
         }
     }
 
-    /// Acceleration: `((f - position_force(x)) - friction(mode, v)) / inertia`; exactly 0
-    /// when stopped.
+    /// Acceleration: `((f - position_force(x)) - friction(mode, x, v)) / inertia`; exactly 0
+    /// when stopped. `BUMP` must be `bump_on` (see [`Coeffs::local`]).
     #[inline]
-    pub(crate) fn accel(&self, x: R, v: R, mode: Mode, f: R) -> R {
+    pub(crate) fn accel<const BUMP: bool>(&self, x: R, v: R, mode: Mode, f: R) -> R {
         if mode == Mode::Stopped {
             return R::ZERO;
         }
-        (self.hold(x, f) - self.friction(mode, v)) / self.inertia
+        (self.hold(x, f) - self.friction_with(mode, self.local::<BUMP>(x), v)) / self.inertia
     }
 }

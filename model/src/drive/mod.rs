@@ -40,7 +40,7 @@ mod force;
 mod params;
 mod step;
 
-pub use params::{DriveParams, Motion, PositionForce, MAX_DRIVE_DELAY_STEPS};
+pub use params::{DriveParams, LocalFriction, Motion, PositionForce, MAX_DRIVE_DELAY_STEPS};
 pub use step::{DriveReport, DRIVE_MAX_SEGMENTS};
 
 use crate::extensions::deadband;
@@ -123,6 +123,10 @@ pub struct Drive<R: Real = f64> {
     /// `position_force(x)` of a stopped axis that has not moved since it was computed: a
     /// resting axis costs no position-force evaluation per step (same bits).
     resting_force: Option<R>,
+    /// With localised friction, `b(x)` (`None`: 0 there) computed with `resting_force`, at the
+    /// same position: a resting axis costs no bump evaluation per step either. Unused (never
+    /// read or written) without localised friction.
+    resting_bump: Option<R>,
 }
 
 impl<R: Real> Drive<R> {
@@ -145,6 +149,7 @@ impl<R: Real> Drive<R> {
             effort: R::ZERO,
             delay: DelayLine::new(),
             resting_force: None,
+            resting_bump: None,
         };
         d.set_state(x0, 0.0)?;
         Ok(d)
@@ -185,13 +190,26 @@ impl<R: Real> Drive<R> {
     /// Advances by one step `h` with input `u` [input units, e.g. V, or force when
     /// `gain = 1`], held over the step. Input path: delay line, dead band, then
     /// `gain * u + offset`. With load friction the step's dry-friction levels grow by
-    /// `load_friction * |gain * deadband(u)|` (constant over the step, like the force).
+    /// `load_friction * |gain * deadband(u)|` (constant over the step, like the force); with
+    /// localised friction they grow by `b(x)` at each evaluation's position.
     ///
     /// A non-finite input or force, or a non-finite result, rejects the step: state, mode,
     /// time and delay line stay as they were. Every accepted state is finite and within
     /// `[min, max]`.
     #[inline]
     pub fn step(&mut self, u: R) -> Result<DriveReport, DriveStepError> {
+        if self.c.bump_on {
+            self.advance::<true>(u)
+        } else {
+            self.advance::<false>(u)
+        }
+    }
+
+    /// [`Drive::step`] compiled for `BUMP == self.c.bump_on`: without localised friction
+    /// the step has exactly the operations it had before the bump existed (no flag test per
+    /// evaluation either).
+    #[inline]
+    fn advance<const BUMP: bool>(&mut self, u: R) -> Result<DriveReport, DriveStepError> {
         if !u.is_finite() {
             return Err(DriveStepError::InputNotFinite);
         }
@@ -213,17 +231,24 @@ impl<R: Real> Drive<R> {
         let px = if self.mode == Mode::Stopped {
             Some(match self.resting_force {
                 Some(p) => p,
-                None => self.c.restoring.at(self.x),
+                None => {
+                    if BUMP {
+                        self.resting_bump = self.c.local::<BUMP>(self.x);
+                    }
+                    self.c.restoring.at(self.x)
+                }
             })
         } else {
             None
         };
         if let Some(p) = px {
             let hold = f - p;
+            // `b(x)` at the resting position, computed with `p` (none without a bump).
+            let b = if BUMP { self.resting_bump } else { None };
             // No breakaway guard open (the usual resting step: no friction evaluation), or a
             // release that its acceleration check refuses.
-            let held = step::breakaway(c, self.x, hold).is_none()
-                || step::release(c, self.x, self.v, hold).0 == Mode::Stopped;
+            let held = step::breakaway(c, self.x, hold, b).is_none()
+                || step::release(c, self.x, self.v, hold, b).0 == Mode::Stopped;
             if held {
                 // Held for the whole step (the holding force is constant over it): the state
                 // stays as it is, bit for bit; what `step::step` would do, without its set-up.
@@ -233,12 +258,12 @@ impl<R: Real> Drive<R> {
             }
         }
         let start = (self.x, self.v, self.mode);
-        let (x, v, mode, report) = step::step(c, self.h, start, f, px.map(|p| f - p));
+        let (x, v, mode, report) = step::step::<R, BUMP>(c, self.h, start, f, px.map(|p| f - p));
         if !(x.is_finite() && v.is_finite()) {
             return Err(DriveStepError::NonFinite);
         }
         // Stopped at the start and at the end without an event or a late reset: the axis
-        // never moved, `x` is the same value and so is its position force.
+        // never moved, `x` is the same value and so are its position force and bump.
         let rested = mode == Mode::Stopped && report == DriveReport::default();
         self.resting_force = if rested { px } else { None };
         self.x = x;
@@ -311,10 +336,15 @@ impl<R: Real> Drive<R> {
         let position_force = c.restoring.at(self.x);
         let friction = match self.mode {
             Mode::Stopped => self.applied - position_force,
-            m => c.friction(m, self.v),
+            m => c.friction(m, self.x, self.v),
+        };
+        let acceleration = if c.bump_on {
+            c.accel::<true>(self.x, self.v, self.mode, self.applied)
+        } else {
+            c.accel::<false>(self.x, self.v, self.mode, self.applied)
         };
         DriveOutput {
-            acceleration: c.accel(self.x, self.v, self.mode, self.applied),
+            acceleration,
             friction,
             position_force,
             applied: self.applied,

@@ -71,12 +71,39 @@ pub enum PositionForce {
     },
 }
 
+/// Dry friction that depends on position: a stretch of the axis where the dry friction is
+/// higher (a tight spot of a screw, a dirty patch of a rail, a worn gear tooth) or lower.
+/// Added to all four dry levels of [`DriveParams`] (kinetic and breakaway, both directions).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LocalFriction {
+    /// No position-dependent friction: the dry levels are the same everywhere.
+    None,
+    /// A smooth bump (or, with a negative amplitude, a dip) of dry friction:
+    /// `b(x) = amplitude * (1 - s^2)^2` for `|s| < 1`, `s = (x - center) / half_width`, and
+    /// `0` outside (the kernel of the crane's localised friction, [`Bump`](crate::Bump), with
+    /// the same operation order). `b` is continuous with a continuous slope, its peak is
+    /// `amplitude` at `center`, its slope at most `1.54 |amplitude| / half_width`, and its
+    /// integral over the axis `amplitude * half_width * 16 / 15` (the work it takes from a
+    /// slide across it).
+    Bump {
+        /// Centre [m or rad] (finite).
+        center: f64,
+        /// Half the width of the support [m or rad] (> 0, finite): `b = 0` where
+        /// `|x - center| >= half_width`.
+        half_width: f64,
+        /// Peak change of every dry level [N or N m] (finite; negative for a dip, then
+        /// `kinetic_pos`, `kinetic_neg`, `breakaway_pos` and `breakaway_neg` plus it must each
+        /// be `>= 0`, so no level turns negative).
+        amplitude: f64,
+    },
+}
+
 /// Parameters of a single-axis drive (motor + screw, belt or gear + carriage, or a
 /// direct-drive joint), in SI or input units (see [`Motion`]).
 ///
 /// Equation of motion, with the drive effort `Fd = gain * deadband(u(t - delay), deadband)`
 /// and the applied force `F = Fd + offset`:
-/// `inertia * xdd = F - position_force(x) - friction(mode, v)`.
+/// `inertia * xdd = F - position_force(x) - friction(mode, x, v)`.
 ///
 /// Friction levels of a step (the input is held over it, so they are constant in it), with
 /// the load share `L = load_friction * |Fd|` (the offset carries no load: `L` grows with the
@@ -88,9 +115,18 @@ pub enum PositionForce {
 /// `|v| >> stribeck_velocity`. Friction `Sp + viscous_pos * v` moving positive,
 /// `-Sn + viscous_neg * v` moving negative (both oppose the motion). A stopped axis holds
 /// (`v = 0`, `xdd = 0`) while `-Bn <= F - position_force(x) <= Bp`, and breaks away when the
-/// holding force passes `Bp` or `-Bn`. With `stribeck_velocity = 0` and `load_friction = 0`
-/// (the defaults) the friction is the classic kinetic + viscous law with stiction, computed
-/// with exactly the operations it had before these two fields existed.
+/// holding force passes `Bp` or `-Bn`.
+///
+/// With localised friction ([`LocalFriction::Bump`], `b(x)`) the four levels are taken at the
+/// position: `Cp = kinetic_pos + L + b(x)`, `Cn = kinetic_neg + L + b(x)`,
+/// `Bp = breakaway_pos + L + b(x)`, `Bn = breakaway_neg + L + b(x)` (the load share first,
+/// then the bump; the Stribeck blend above works on these), so a moving axis meets `b` at
+/// the position of each RK4 stage and a stopped one needs `breakaway + L + b(x)` at its
+/// resting position to break away.
+///
+/// With `stribeck_velocity = 0`, `load_friction = 0` and `local_friction = None` (the
+/// defaults) the friction is the classic kinetic + viscous law with stiction, computed with
+/// exactly the operations it had before these three fields existed.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DriveParams {
     /// Linear or rotary (units only).
@@ -140,11 +176,14 @@ pub struct DriveParams {
     /// transmitted force). A stopped axis under `F = Fd` (no offset, no position force) then
     /// holds while `|F| <= breakaway / (1 - mu)`.
     pub load_friction: f64,
+    /// Position-dependent dry friction added to all four dry levels ([`LocalFriction`]);
+    /// `LocalFriction::None`: none.
+    pub local_friction: LocalFriction,
 }
 
 impl Default for DriveParams {
     /// A 1 kg linear carriage with 1 N/V gain, no friction (no Stribeck weakening, no load
-    /// friction), no position force, no dead band, no delay and no end stops: the frictionless
+    /// friction, no localised friction), no position force, no dead band, no delay and no end stops: the frictionless
     /// point mass.
     fn default() -> Self {
         DriveParams {
@@ -165,6 +204,7 @@ impl Default for DriveParams {
             max: f64::INFINITY,
             stribeck_velocity: 0.0,
             load_friction: 0.0,
+            local_friction: LocalFriction::None,
         }
     }
 }
@@ -203,7 +243,9 @@ impl DriveParams {
     /// centre finite; `delay_steps <= MAX_DRIVE_DELAY_STEPS` (`TooLarge`); `min`, `max` not
     /// NaN (infinite allowed) with `min < max` (`EmptyRange`, field `"min"`);
     /// `stribeck_velocity` at least 0 and finite; `load_friction` at least 0, finite and
-    /// below 1 (`NotBelowOne`).
+    /// below 1 (`NotBelowOne`); a bump's `center` finite, `half_width` > 0 and finite,
+    /// `amplitude` finite and at least minus the smallest of the four dry levels
+    /// (`LevelBelowZero`, field `"local_friction.amplitude"`).
     pub fn validate(&self) -> Result<(), Error> {
         check("inertia", self.inertia, Problem::NotPositive)?;
         check("gain", self.gain, Problem::NotPositive)?;
@@ -244,6 +286,36 @@ impl DriveParams {
                 problem: Problem::NotBelowOne,
                 value: self.load_friction,
             });
+        }
+        if let LocalFriction::Bump {
+            center,
+            half_width,
+            amplitude,
+        } = self.local_friction
+        {
+            check("local_friction.center", center, Problem::NotFinite)?;
+            check(
+                "local_friction.half_width",
+                half_width,
+                Problem::NotPositive,
+            )?;
+            check("local_friction.amplitude", amplitude, Problem::NotFinite)?;
+            // A dip may lower a level to 0, not below (the sign of a sum of two finite f64
+            // is that of the exact sum, so this test is exact).
+            for level in [
+                self.kinetic_pos,
+                self.kinetic_neg,
+                self.breakaway_pos,
+                self.breakaway_neg,
+            ] {
+                if level + amplitude < 0.0 {
+                    return Err(Error {
+                        field: "local_friction.amplitude",
+                        problem: Problem::LevelBelowZero,
+                        value: amplitude,
+                    });
+                }
+            }
         }
         not_nan("min", self.min)?;
         not_nan("max", self.max)?;

@@ -46,29 +46,37 @@ pub struct DriveReport {
 
 /// Resolves the mode of the axis at `(x, v)` under the applied force `f`; returns the mode
 /// and the acceleration in it. A moving axis keeps its mode; a stopped one goes through
-/// [`release`] with its holding force `f - position_force(x)`.
+/// [`release`] with its holding force `f - position_force(x)` and the localised friction at
+/// `x`.
 #[inline]
-pub(crate) fn resolve<R: Real>(c: &Coeffs<R>, x: R, v: R, mode: Mode, f: R) -> (Mode, R) {
+pub(crate) fn resolve<R: Real, const BUMP: bool>(
+    c: &Coeffs<R>,
+    x: R,
+    v: R,
+    mode: Mode,
+    f: R,
+) -> (Mode, R) {
     if mode != Mode::Stopped {
-        return (mode, c.accel(x, v, mode, f));
+        return (mode, c.accel::<BUMP>(x, v, mode, f));
     }
-    release(c, x, v, c.hold(x, f))
+    release(c, x, v, c.hold(x, f), c.local::<BUMP>(x))
 }
 
 /// The breakaway guards of a stopped axis at `x` with holding force `hold`
-/// (`f - position_force(x)`): it breaks away positive if `hold > breakaway_pos` (and
-/// `x < max`), negative if `hold < -breakaway_neg` (and `x > min`), with the levels of `c`
-/// (the step's, load share included), the larger positive margin
-/// winning (positive on a tie); the release stands only if the acceleration
-/// `(hold - friction) / inertia` then has the direction's sign. Returns the mode and the
-/// acceleration (0 when it stays stopped).
+/// (`f - position_force(x)`) and localised friction `b` at `x` (`Coeffs::bump_at(x)`): it
+/// breaks away positive if `hold > Bp` (and `x < max`), negative if `hold < -Bn` (and
+/// `x > min`), with the breakaway levels `(Bp, Bn)` of `c` at `x` (the step's, load share
+/// included, plus `b`), the larger positive margin winning (positive on a tie); the release
+/// stands only if the acceleration `(hold - friction) / inertia` then has the direction's
+/// sign. Returns the mode and the acceleration (0 when it stays stopped).
 #[inline]
-pub(crate) fn release<R: Real>(c: &Coeffs<R>, x: R, v: R, hold: R) -> (Mode, R) {
-    let Some(dir) = breakaway(c, x, hold) else {
+pub(crate) fn release<R: Real>(c: &Coeffs<R>, x: R, v: R, hold: R, b: Option<R>) -> (Mode, R) {
+    let Some(dir) = breakaway(c, x, hold, b) else {
         return (Mode::Stopped, R::ZERO);
     };
-    // The same bits as `c.accel(x, v, dir, f)`: `hold` is `c.hold(x, f)`.
-    let a = (hold - c.friction(dir, v)) / c.inertia;
+    // The same bits as `c.accel(x, v, dir, f)`: `hold` is `c.hold(x, f)`, `b` is
+    // `c.bump_at(x)`.
+    let a = (hold - c.friction_with(dir, b, v)) / c.inertia;
     let consistent = match dir {
         Mode::Positive => a > R::ZERO,
         _ => a < R::ZERO,
@@ -81,19 +89,21 @@ pub(crate) fn release<R: Real>(c: &Coeffs<R>, x: R, v: R, hold: R) -> (Mode, R) 
 }
 
 /// The guards of [`release`] alone: the direction a stopped axis at `x` with holding force
-/// `hold` would break away in, before the acceleration check; `None`: it holds (and
-/// [`release`] returns `Stopped`), decided without evaluating the friction.
+/// `hold` and localised friction `b` would break away in, before the acceleration check;
+/// `None`: it holds (and [`release`] returns `Stopped`), decided without evaluating the
+/// friction.
 #[inline]
-pub(crate) fn breakaway<R: Real>(c: &Coeffs<R>, x: R, hold: R) -> Option<Mode> {
+pub(crate) fn breakaway<R: Real>(c: &Coeffs<R>, x: R, hold: R, b: Option<R>) -> Option<Mode> {
+    let (bp, bn) = c.breakaway_at(b);
     let mut best: Option<(Mode, R)> = None;
     if x < c.max {
-        let m = hold - c.breakaway_pos;
+        let m = hold - bp;
         if m > R::ZERO {
             best = Some((Mode::Positive, m));
         }
     }
     if x > c.min {
-        let m = -c.breakaway_neg - hold;
+        let m = -bn - hold;
         let better = match best {
             Some((_, b)) => m > b,
             None => m > R::ZERO,
@@ -108,17 +118,25 @@ pub(crate) fn breakaway<R: Real>(c: &Coeffs<R>, x: R, hold: R) -> Option<Mode> {
 /// One RK4 step of length `dt` in a moving `mode` from `(x, v)` with first stage `a1`.
 /// Returns the new position and velocity and the last stage's acceleration.
 #[inline]
-fn rk4<R: Real>(c: &Coeffs<R>, x: R, v: R, mode: Mode, f: R, a1: R, dt: R) -> (R, R, R) {
+fn rk4<R: Real, const BUMP: bool>(
+    c: &Coeffs<R>,
+    x: R,
+    v: R,
+    mode: Mode,
+    f: R,
+    a1: R,
+    dt: R,
+) -> (R, R, R) {
     let half = dt * R::HALF;
     let x2 = x + half * v;
     let v2 = v + half * a1;
-    let a2 = c.accel(x2, v2, mode, f);
+    let a2 = c.accel::<BUMP>(x2, v2, mode, f);
     let x3 = x + half * v2;
     let v3 = v + half * a2;
-    let a3 = c.accel(x3, v3, mode, f);
+    let a3 = c.accel::<BUMP>(x3, v3, mode, f);
     let x4 = x + dt * v3;
     let v4 = v + dt * a3;
-    let a4 = c.accel(x4, v4, mode, f);
+    let a4 = c.accel::<BUMP>(x4, v4, mode, f);
     let w = dt / R::SIX;
     let xn = x + w * (v + R::TWO * v2 + R::TWO * v3 + v4);
     let vn = v + w * (a1 + R::TWO * a2 + R::TWO * a3 + a4);
@@ -205,9 +223,10 @@ fn sweep<R: Real>(c: &Coeffs<R>, x: &mut R, v: &mut R, mode: &mut Mode) -> bool 
 
 /// Advances `(x, v, mode)` by `h` under the applied force `f` (held). `hold0` is the holding
 /// force `f - position_force(x0)` of a stopped axis when the caller knows it (the same bits
-/// as computing it here; `None` computes it). Returns the new state, mode and what happened.
+/// as computing it here; `None` computes it). `BUMP` must be `c.bump_on`: the step without
+/// localised friction is compiled without it. Returns the new state, mode and what happened.
 /// Pure: the caller commits.
-pub(crate) fn step<R: Real>(
+pub(crate) fn step<R: Real, const BUMP: bool>(
     c: &Coeffs<R>,
     h: R,
     (x0, v0, mode0): (R, R, Mode),
@@ -218,8 +237,8 @@ pub(crate) fn step<R: Real>(
     let mut report = DriveReport::default();
     let mut done = R::ZERO;
     let (mut mode, mut a1) = match (mode0, hold0) {
-        (Mode::Stopped, Some(hold)) => release(c, x, v, hold),
-        _ => resolve(c, x, v, mode0, f),
+        (Mode::Stopped, Some(hold)) => release(c, x, v, hold, c.local::<BUMP>(x)),
+        _ => resolve::<R, BUMP>(c, x, v, mode0, f),
     };
     for seg in 0..DRIVE_MAX_SEGMENTS {
         if mode == Mode::Stopped {
@@ -227,7 +246,7 @@ pub(crate) fn step<R: Real>(
             break;
         }
         let tau = h - done;
-        let (xn, vn, a4) = rk4(c, x, v, mode, f, a1, tau);
+        let (xn, vn, a4) = rk4::<R, BUMP>(c, x, v, mode, f, a1, tau);
         if seg + 1 == DRIVE_MAX_SEGMENTS {
             // The last segment locates nothing: the late sweep below resets what it crossed.
             x = xn;
@@ -259,7 +278,7 @@ pub(crate) fn step<R: Real>(
             break;
         };
         let s = th * tau;
-        let (xe, _, _) = rk4(c, x, v, mode, f, a1, s);
+        let (xe, _, _) = rk4::<R, BUMP>(c, x, v, mode, f, a1, s);
         x = if limit_first {
             if mode == Mode::Positive {
                 c.max
@@ -272,7 +291,7 @@ pub(crate) fn step<R: Real>(
         v = R::ZERO;
         report.events = report.events.saturating_add(1);
         done = done + s;
-        (mode, a1) = resolve(c, x, v, Mode::Stopped, f);
+        (mode, a1) = resolve::<R, BUMP>(c, x, v, Mode::Stopped, f);
         if done >= h {
             break;
         }
