@@ -1,9 +1,10 @@
 //! Physics of the single-axis drive (`crane_model::Drive`): energy, exact sticking, the
 //! stick-slip staircase, end stops, input path, parameter and input validation, Stribeck
-//! weakening and load-dependent friction.
+//! weakening, load-dependent and localised friction.
 
 use crane_model::{
-    Drive, DriveParams, DriveStepError, Mode, Motion, PositionForce, Problem, MAX_DRIVE_DELAY_STEPS,
+    Drive, DriveParams, DriveStepError, LocalFriction, Mode, Motion, PositionForce, Problem,
+    MAX_DRIVE_DELAY_STEPS,
 };
 
 const H: f64 = 1e-3;
@@ -516,7 +517,14 @@ fn bad_parameters_name_their_field() {
     };
     assert!(Drive::<f64>::new(&ok, H, 0.0).is_ok());
     type Case = (fn(&mut DriveParams), &'static str, Problem);
-    let cases: [Case; 22] = [
+    fn bump(center: f64, half_width: f64, amplitude: f64) -> LocalFriction {
+        LocalFriction::Bump {
+            center,
+            half_width,
+            amplitude,
+        }
+    }
+    let cases: [Case; 29] = [
         (|p| p.inertia = 0.0, "inertia", Problem::NotPositive),
         (|p| p.inertia = f64::INFINITY, "inertia", Problem::NotFinite),
         (|p| p.gain = -1.0, "gain", Problem::NotPositive),
@@ -584,6 +592,48 @@ fn bad_parameters_name_their_field() {
             "load_friction",
             Problem::NotFinite,
         ),
+        (
+            |p| p.local_friction = bump(f64::NAN, 0.1, 1.0),
+            "local_friction.center",
+            Problem::NotFinite,
+        ),
+        (
+            |p| p.local_friction = bump(0.0, 0.0, 1.0),
+            "local_friction.half_width",
+            Problem::NotPositive,
+        ),
+        (
+            |p| p.local_friction = bump(0.0, f64::INFINITY, 1.0),
+            "local_friction.half_width",
+            Problem::NotFinite,
+        ),
+        (
+            |p| p.local_friction = bump(0.0, 0.1, f64::INFINITY),
+            "local_friction.amplitude",
+            Problem::NotFinite,
+        ),
+        // A dip deeper than the kinetic level (1 N) of either direction.
+        (
+            |p| p.local_friction = bump(0.0, 0.1, -1.01),
+            "local_friction.amplitude",
+            Problem::LevelBelowZero,
+        ),
+        (
+            |p| {
+                p.kinetic_neg = 0.5;
+                p.local_friction = bump(0.0, 0.1, -0.75);
+            },
+            "local_friction.amplitude",
+            Problem::LevelBelowZero,
+        ),
+        (
+            |p| {
+                (p.kinetic_pos, p.breakaway_pos) = (0.0, 0.0);
+                p.local_friction = bump(0.0, 0.1, -1e-300);
+            },
+            "local_friction.amplitude",
+            Problem::LevelBelowZero,
+        ),
     ];
     for (mutate, field, problem) in cases {
         let mut p = ok;
@@ -591,6 +641,14 @@ fn bad_parameters_name_their_field() {
         let e = Drive::<f64>::new(&p, H, 0.0).expect_err(field);
         assert_eq!((e.field, e.problem), (field, problem), "{e}");
         assert!(e.to_string().contains(field));
+    }
+    // A dip down to exactly 0 is valid, and so is any bump.
+    for amplitude in [-1.0, 0.0, 1e9] {
+        let p = DriveParams {
+            local_friction: bump(0.3, 0.1, amplitude),
+            ..ok
+        };
+        assert!(Drive::<f64>::new(&p, H, 0.0).is_ok(), "{amplitude}");
     }
     for (h, problem) in [(0.0, Problem::NotPositive), (f64::NAN, Problem::NotFinite)] {
         let e = Drive::<f64>::new(&ok, h, 0.0).expect_err("h");
@@ -987,4 +1045,265 @@ fn f32_drive_follows_f64_with_stribeck_and_load_friction() {
     assert!(slips >= 2, "slips: {slips}");
     let range = 2.0; // rad, about
     assert!(worst < 1e-3 * range, "f32 vs f64 position: {worst}");
+}
+
+/// A 2 kg slider with kinetic 1 N, breakaway 1.5 N both ways and a bump of `amplitude` [N],
+/// half-width 0.05 m, at 0.2 m.
+fn bumpy(amplitude: f64) -> DriveParams {
+    DriveParams {
+        inertia: 2.0,
+        kinetic_pos: 1.0,
+        kinetic_neg: 1.0,
+        breakaway_pos: 1.5,
+        breakaway_neg: 1.5,
+        local_friction: LocalFriction::Bump {
+            center: 0.2,
+            half_width: 0.05,
+            amplitude,
+        },
+        ..DriveParams::default()
+    }
+}
+
+/// The force [N] at which an axis resting at `x0` breaks away under a ramp `sign * n * 1e-6`
+/// (after 100 steps held at 0, so that it breaks away from the kept resting state), and the
+/// position it then moves from.
+fn breakaway_force(p: &DriveParams, x0: f64, sign: f64) -> (f64, f64) {
+    let mut d: Drive = Drive::new(p, H, x0).expect("valid");
+    for _ in 0..100 {
+        d.step(0.0).expect("step");
+    }
+    for n in 1..10_000_000u32 {
+        let f = sign * f64::from(n) * 1e-6;
+        d.step(f).expect("step");
+        if d.mode() != Mode::Stopped {
+            return (f, x0);
+        }
+        assert_eq!(d.x().to_bits(), x0.to_bits(), "a held axis stays put");
+    }
+    panic!("never broke away from {x0}");
+}
+
+#[test]
+fn a_bump_raises_the_breakaway_level_where_the_axis_rests() {
+    for amplitude in [0.8, -0.6] {
+        let p = bumpy(amplitude);
+        for sign in [1.0, -1.0] {
+            // At the centre `breakaway + amplitude`; outside (and on the edge of the support,
+            // where `b = 0`) only `breakaway`; half-way out `breakaway + amplitude * 9 / 16`.
+            for (x0, level) in [
+                (0.2, 1.5 + amplitude),
+                (0.0, 1.5),
+                (0.25, 1.5),
+                (0.5, 1.5),
+                (0.225, 1.5 + amplitude * 0.5625),
+            ] {
+                let (f, _) = breakaway_force(&p, x0, sign);
+                assert!(
+                    f.abs() > level - 1e-9 && f.abs() <= level + 1.01e-6,
+                    "A = {amplitude}, x0 = {x0}: broke away at {f}, level {level}"
+                );
+            }
+        }
+    }
+    // Exactly at the level it holds, one ulp above it slips (the guard is strict).
+    let p = bumpy(0.8);
+    let level: f64 = 1.5 + 0.8; // `breakaway + b(center)`, `b(center) = 0.8 * 1 * 1`
+    for (f, holds) in [(level, true), (f64::from_bits(level.to_bits() + 1), false)] {
+        let mut d: Drive = Drive::new(&p, H, 0.2).expect("valid");
+        for _ in 0..10 {
+            d.step(f).expect("step");
+        }
+        assert_eq!(d.mode() == Mode::Stopped, holds, "F = {f}");
+    }
+    // Without the bump the same axis needs 1.5 N at the centre.
+    let flat = DriveParams {
+        local_friction: LocalFriction::None,
+        ..p
+    };
+    let (f, _) = breakaway_force(&flat, 0.2, 1.0);
+    assert!(f > 1.5 - 1e-9 && f <= 1.5 + 1.01e-6, "{f}");
+}
+
+#[test]
+fn a_slide_across_a_bump_loses_its_integral_and_decelerates_inside() {
+    // Kinetic 0.5 N, no viscous, pushed by nothing: outside the bump the energy
+    // `m v^2 / 2 + C x` is constant; across it falls by `A w 16 / 15`.
+    let (amplitude, half_width) = (3.0, 0.1);
+    let p = DriveParams {
+        inertia: 2.0,
+        kinetic_pos: 0.5,
+        kinetic_neg: 0.5,
+        breakaway_pos: 0.5,
+        breakaway_neg: 0.5,
+        local_friction: LocalFriction::Bump {
+            center: 0.6,
+            half_width,
+            amplitude,
+        },
+        ..DriveParams::default()
+    };
+    let e = |d: &Drive| 0.5 * p.inertia * d.v() * d.v() + 0.5 * d.x();
+    let mut d: Drive = Drive::new(&p, H, 0.0).expect("valid");
+    d.set_state(0.0, 2.0).expect("state");
+    let e0 = e(&d);
+    let mut worst_outside = 0.0f64;
+    let mut inside_steps = 0;
+    while d.x() < 1.0 {
+        let (x0, v0) = (d.x(), d.v());
+        d.step(0.0).expect("step");
+        assert_eq!(d.mode(), Mode::Positive, "stopped at {}", d.x());
+        let a = (d.v() - v0) / H;
+        let s = (0.5 * (x0 + d.x()) - 0.6) / half_width;
+        if s.abs() < 0.9 {
+            // Inside: decelerates by (C + b(x)) / m, more than the C / m outside.
+            let b = amplitude * (1.0 - s * s).powi(2);
+            assert!(
+                (a + (0.5 + b) / p.inertia).abs() < 1e-2 * (0.5 + b),
+                "x = {}: a = {a}, expected {}",
+                d.x(),
+                -(0.5 + b) / p.inertia
+            );
+            assert!(a < -0.25 - 1e-3);
+            let o = d.output();
+            let bx = {
+                let s = (d.x() - 0.6) / half_width;
+                amplitude * (1.0 - s * s) * (1.0 - s * s)
+            };
+            assert!((o.friction - (0.5 + bx)).abs() < 1e-12, "{}", o.friction);
+            inside_steps += 1;
+        } else if d.x() < 0.5 && x0 > 0.0 {
+            worst_outside = worst_outside.max((e(&d) - e0).abs());
+            assert!((a + 0.25).abs() < 1e-9, "outside: a = {a}");
+        }
+    }
+    assert!(inside_steps > 50, "{inside_steps}");
+    assert!(
+        worst_outside < 1e-12,
+        "energy drift before the bump: {worst_outside}"
+    );
+    let lost = e0 - e(&d);
+    let integral = amplitude * half_width * 16.0 / 15.0; // 0.32 J
+                                                         // RK4 meets the jumps of `b''` at the edges of the support (`b` is C1 only): its error
+                                                         // there is O(h^3) per edge, 4e-8 J at h = 1 ms, 64 times less at h / 4.
+    let err = (lost - integral).abs();
+    assert!(
+        err < 1e-6 * integral,
+        "lost {lost} J, integral of b {integral} J"
+    );
+    let mut fine: Drive = Drive::new(&p, H / 4.0, 0.0).expect("valid");
+    fine.set_state(0.0, 2.0).expect("state");
+    while fine.x() < 1.0 {
+        fine.step(0.0).expect("step");
+    }
+    let err_fine = ((e0 - e(&fine)) - integral).abs();
+    assert!(err_fine < err / 20.0, "h: {err} J, h / 4: {err_fine} J");
+    // The same slide without the bump loses nothing but C x.
+    let flat = DriveParams {
+        local_friction: LocalFriction::None,
+        ..p
+    };
+    let mut d: Drive = Drive::new(&flat, H, 0.0).expect("valid");
+    d.set_state(0.0, 2.0).expect("state");
+    while d.x() < 1.0 {
+        d.step(0.0).expect("step");
+    }
+    assert!((e(&d) - e0).abs() < 1e-12);
+    // A negative slide across it (Negative mode) loses the same.
+    let mut d: Drive = Drive::new(&p, H, 1.2).expect("valid");
+    d.set_state(1.2, -2.0).expect("state");
+    let en = |d: &Drive| 0.5 * p.inertia * d.v() * d.v() - 0.5 * d.x();
+    let e0 = en(&d);
+    while d.x() > 0.2 {
+        d.step(0.0).expect("step");
+    }
+    assert!(((e0 - en(&d)) - integral).abs() < 1e-6 * integral);
+}
+
+#[test]
+fn without_local_friction_the_trajectory_bits_are_those_of_the_model_without_it() {
+    // The joint of `with_both_effects_off_...`: stick-slip with gravity, dead band, delay.
+    let p = DriveParams {
+        motion: Motion::Rotary,
+        inertia: 0.12,
+        viscous_pos: 0.3,
+        viscous_neg: 0.35,
+        kinetic_pos: 8.0,
+        kinetic_neg: 9.0,
+        breakaway_pos: 10.75,
+        breakaway_neg: 12.0,
+        offset: 0.5,
+        position_force: PositionForce::Pendulum {
+            stiffness: 40.3,
+            center: 0.0,
+        },
+        deadband: 0.05,
+        delay_steps: 3,
+        ..DriveParams::default()
+    };
+    assert_eq!(p.local_friction, LocalFriction::None, "the default");
+    let (h, events, stuck) = trajectory_hash(&p);
+    assert!(events > 5 && stuck > 1000);
+    // The bits of the model before the friction effects (commit 21144e4) and before the bump.
+    assert_eq!(h, GOLDEN_BEFORE_FRICTION_EFFECTS, "got {h:#018x}");
+    // A bump of amplitude 0 is off: the same bits.
+    let zero = DriveParams {
+        local_friction: LocalFriction::Bump {
+            center: 0.1,
+            half_width: 0.5,
+            amplitude: 0.0,
+        },
+        ..p
+    };
+    assert_eq!(trajectory_hash(&zero).0, h);
+    // A bump (or dip) on the travelled range changes them; one far away does not.
+    for (center, amplitude, changes) in [(0.1, 1.0, true), (0.1, -2.0, true), (50.0, 1.0, false)] {
+        let q = DriveParams {
+            local_friction: LocalFriction::Bump {
+                center,
+                half_width: 0.5,
+                amplitude,
+            },
+            ..p
+        };
+        assert_eq!(trajectory_hash(&q).0 != h, changes, "{center}, {amplitude}");
+    }
+}
+
+#[test]
+fn f32_drive_follows_f64_with_a_bump() {
+    let p = DriveParams {
+        motion: Motion::Rotary,
+        inertia: 0.1,
+        viscous_pos: 0.05,
+        viscous_neg: 0.05,
+        kinetic_pos: 6.0,
+        kinetic_neg: 6.0,
+        breakaway_pos: 10.0,
+        breakaway_neg: 10.0,
+        position_force: PositionForce::Pendulum {
+            stiffness: 40.0,
+            center: 0.0,
+        },
+        stribeck_velocity: 0.05,
+        load_friction: 0.1,
+        local_friction: LocalFriction::Bump {
+            center: 0.3,
+            half_width: 0.2,
+            amplitude: 4.0,
+        },
+        ..DriveParams::default()
+    };
+    let mut a: Drive<f64> = Drive::new(&p, H, 0.0).expect("valid");
+    let mut b: Drive<f32> = Drive::new(&p, H, 0.0).expect("valid");
+    let (mut worst, mut inside) = (0.0f64, 0usize);
+    for n in 0..20_000 {
+        let u = 30.0 * (n as f64 * H * 0.5).sin();
+        a.step(u).expect("f64 step");
+        b.step(u as f32).expect("f32 step");
+        inside += usize::from((a.x() - 0.3).abs() < 0.2);
+        worst = worst.max((a.x() - f64::from(b.x())).abs());
+    }
+    assert!(inside > 1000, "steps on the bump: {inside}");
+    assert!(worst < 1e-3 * 2.0, "f32 vs f64 position: {worst}");
 }
