@@ -7,8 +7,9 @@
 //! located inside the step, and sticks again while the holding force stays within the
 //! breakaway levels. So a force ramp against a spring gives the exact stick-slip staircase.
 //! Optional: Stribeck weakening (the sliding dry friction falls from the breakaway to the
-//! kinetic level with speed) and load-dependent friction (all dry levels grow with the drive
-//! effort); see [`DriveParams`].
+//! kinetic level with speed), load-dependent friction (all dry levels grow with the drive
+//! effort) and localised friction (all dry levels grow, or fall, over a stretch of the axis:
+//! [`LocalFriction`]); see [`DriveParams`].
 //!
 //! Where to look:
 //! - [`DriveParams`] (`params.rs`): parameters, units, signs, validation.
@@ -90,8 +91,8 @@ pub struct DriveOutput<R: Real = f64> {
     /// Friction [N or N m], the term subtracted in the equation of motion: moving positive
     /// `Sp + viscous_pos * v` (> 0 opposes motion), moving negative `-Sn + viscous_neg * v`,
     /// with the dry levels `Sp`, `Sn` of [`DriveParams`] (`kinetic_pos`, `kinetic_neg` without
-    /// Stribeck weakening and load friction; the load share from the last step's drive
-    /// effort); stopped, the static friction that holds the axis, equal to the holding force
+    /// Stribeck weakening, load and localised friction; the load share from the last step's
+    /// drive effort, the bump at the current position); stopped, the static friction that holds the axis, equal to the holding force
     /// `applied - position_force`.
     pub friction: R,
     /// Position force `position_force(x)` [N or N m], positive when it pushes towards negative

@@ -23,6 +23,12 @@
 //! `Coeffs::loaded`), nothing per evaluation. With both off no floating-point operation is
 //! added (a flag test per evaluation and per step). A resting step decides its breakaway
 //! guards before any friction evaluation, so it evaluates no `exp` while it holds.
+//! Localised friction adds to every evaluation, and to every resolution of a stopped axis,
+//! the bump kernel at its position (a subtraction, a division, two comparisons; inside the
+//! support a subtraction, three multiplications and the additions to the levels it uses);
+//! a resting axis keeps `b(x)` with its position force. The step is compiled twice
+//! (`const BUMP: bool`, chosen once per step by [`Drive`](super::Drive)): without a bump
+//! it has neither the kernel nor a flag test for it.
 
 use super::force::Coeffs;
 use crate::modes::Mode;
