@@ -9,10 +9,14 @@
 //! coefficient or, with Stribeck weakening (`vs > 0`), the steepest slope of the weakening
 //! friction if larger, `0.86 (breakaway - kinetic) / vs` (the largest of
 //! `|d/dv (B - C) exp(-(v / vs)^2)|` is `sqrt(2 / e) (B - C) / vs`); the load friction
-//! (constant over a step) adds nothing. Every parameter set the model takes, the two friction
-//! effects included, is simulated as given (`DriveParams` is passed through unchanged).
+//! (constant over a step) adds nothing. `k` is the position force's stiffness plus, with a
+//! localised friction bump, its steepest slope `1.54 |A| / w` (the largest of
+//! `|d/dx A (1 - s^2)^2|`, `s = (x - c) / w`, is `8 / (3 sqrt 3) |A| / w`): a friction that
+//! changes with position acts on the motion like a spring of that stiffness. Every
+//! parameter set the model takes, the three friction effects included, is simulated as given
+//! (`DriveParams` is passed through unchanged).
 
-use crane_model::drive::{Drive, DriveParams, DriveStepError, PositionForce};
+use crane_model::drive::{Drive, DriveParams, DriveStepError, LocalFriction, PositionForce};
 
 /// Largest number of simulator steps per recorded sample.
 pub const MAX_SUBSTEPS: usize = 2000;
@@ -38,12 +42,20 @@ pub enum SimulateError {
 
 /// Number of simulator steps per sample of period `dt` for these parameters.
 pub fn substeps(p: &DriveParams, dt: f64) -> usize {
-    let k = match p.position_force {
+    let mut k = match p.position_force {
         PositionForce::None => 0.0,
         PositionForce::Spring { stiffness, .. } | PositionForce::Pendulum { stiffness, .. } => {
             stiffness
         }
     };
+    if let LocalFriction::Bump {
+        half_width,
+        amplitude,
+        ..
+    } = p.local_friction
+    {
+        k += 1.54 * amplitude.abs() / half_width;
+    }
     let mut d = p.viscous_pos.max(p.viscous_neg);
     if p.stribeck_velocity > 0.0 {
         let excess = (p.breakaway_pos - p.kinetic_pos).max(p.breakaway_neg - p.kinetic_neg);
@@ -153,6 +165,37 @@ mod tests {
         let xw = x(&weak);
         assert!(xw < x(&base) - 1e-4 && xw > x(&base) - 0.05, "{xw}");
         assert!(substeps(&weak, 0.01) > substeps(&base, 0.01));
+        // A bump of 0.5 N over +-0.1 m at 0.5 m: the run crosses it (x = t^2 at 2 m/s^2)
+        // and lags the plain one by about the work it takes, 0.5 * 0.1 * 16 / 15 J.
+        let bumpy = DriveParams {
+            local_friction: LocalFriction::Bump {
+                center: 0.5,
+                half_width: 0.1,
+                amplitude: 0.5,
+            },
+            ..base
+        };
+        let xb = x(&bumpy);
+        assert!(xb < x(&base) - 0.01 && xb > x(&base) - 0.1, "{xb}");
+        // Its slope (77 kN/m on 1 kg over +-10 um) shortens the step like a spring of that
+        // stiffness.
+        let steep = DriveParams {
+            local_friction: LocalFriction::Bump {
+                center: 0.5,
+                half_width: 1e-5,
+                amplitude: 0.5,
+            },
+            ..base
+        };
+        let spring = DriveParams {
+            position_force: PositionForce::Spring {
+                stiffness: 1.54 * 0.5 / 1e-5,
+                center: 0.0,
+            },
+            ..base
+        };
+        assert_eq!(substeps(&steep, 0.01), substeps(&spring, 0.01));
+        assert!(substeps(&steep, 0.01) > substeps(&base, 0.01));
     }
 
     #[test]
