@@ -121,6 +121,8 @@ pub(crate) struct Coeffs<R> {
     pub(crate) bump: Bump<R>,
     /// A bump whose amplitude is not 0 in `R` (a zero amplitude adds nothing: off).
     pub(crate) bump_on: bool,
+    /// `load_on as u8 + 2 * bump_on as u8`: which compiled step [`Drive`](super::Drive) runs.
+    pub(crate) extras: u8,
 }
 
 impl<R: Real> Coeffs<R> {
@@ -146,7 +148,15 @@ impl<R: Real> Coeffs<R> {
             load_on: R::from_f64(p.load_friction) > R::ZERO,
             bump: Bump::new(p.local_friction),
             bump_on: Bump::<R>::new(p.local_friction).amplitude != R::ZERO,
+            extras: 0,
         }
+        .with_extras()
+    }
+
+    /// Sets `extras` from `load_on` and `bump_on`.
+    fn with_extras(mut self) -> Self {
+        self.extras = u8::from(self.load_on) + 2 * u8::from(self.bump_on);
+        self
     }
 
     /// The coefficients of a step whose drive effort is `fd = gain * deadband(u)` [N or N m]

@@ -199,18 +199,23 @@ impl<R: Real> Drive<R> {
     /// `[min, max]`.
     #[inline]
     pub fn step(&mut self, u: R) -> Result<DriveReport, DriveStepError> {
-        if self.c.bump_on {
-            self.advance::<true>(u)
-        } else {
-            self.advance::<false>(u)
+        // One test for the usual step with neither (the one the load flag alone had).
+        match self.c.extras {
+            0 => self.advance::<false, false>(u),
+            1 => self.advance::<true, false>(u),
+            2 => self.advance::<false, true>(u),
+            _ => self.advance::<true, true>(u),
         }
     }
 
-    /// [`Drive::step`] compiled for `BUMP == self.c.bump_on`: without localised friction
-    /// the step has exactly the operations it had before the bump existed (no flag test per
-    /// evaluation either).
+    /// [`Drive::step`] compiled for `LOAD == self.c.load_on` and `BUMP == self.c.bump_on`:
+    /// without localised friction the step has exactly the operations it had before the bump
+    /// existed (no flag test per evaluation either).
     #[inline]
-    fn advance<const BUMP: bool>(&mut self, u: R) -> Result<DriveReport, DriveStepError> {
+    fn advance<const LOAD: bool, const BUMP: bool>(
+        &mut self,
+        u: R,
+    ) -> Result<DriveReport, DriveStepError> {
         if !u.is_finite() {
             return Err(DriveStepError::InputNotFinite);
         }
@@ -223,7 +228,7 @@ impl<R: Real> Drive<R> {
         }
         // The step's coefficients: the parameters', or with the load share in the levels.
         let loaded;
-        let c = if self.c.load_on {
+        let c = if LOAD {
             loaded = self.c.loaded(fd);
             &loaded
         } else {
@@ -248,8 +253,8 @@ impl<R: Real> Drive<R> {
             let b = if BUMP { self.resting_bump } else { None };
             // No breakaway guard open (the usual resting step: no friction evaluation), or a
             // release that its acceleration check refuses.
-            let held = step::breakaway(c, self.x, hold, b).is_none()
-                || step::release(c, self.x, self.v, hold, b).0 == Mode::Stopped;
+            let held = step::breakaway::<R, BUMP>(c, self.x, hold, b).is_none()
+                || step::release::<R, BUMP>(c, self.x, self.v, hold, b).0 == Mode::Stopped;
             if held {
                 // Held for the whole step (the holding force is constant over it): the state
                 // stays as it is, bit for bit; what `step::step` would do, without its set-up.

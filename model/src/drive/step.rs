@@ -27,8 +27,9 @@
 //! the bump kernel at its position (a subtraction, a division, two comparisons; inside the
 //! support a subtraction, three multiplications and the additions to the levels it uses);
 //! a resting axis keeps `b(x)` with its position force. The step is compiled twice
-//! (`const BUMP: bool`, chosen once per step by [`Drive`](super::Drive)): without a bump
-//! it has neither the kernel nor a flag test for it.
+//! (`const BUMP: bool`; [`Drive`](super::Drive) picks one of four compiled steps, load
+//! friction and bump on or off, with one test of a byte per step): without a bump it has
+//! neither the kernel nor a flag test for it.
 
 use super::force::Coeffs;
 use crate::modes::Mode;
@@ -65,7 +66,7 @@ pub(crate) fn resolve<R: Real, const BUMP: bool>(
     if mode != Mode::Stopped {
         return (mode, c.accel::<BUMP>(x, v, mode, f));
     }
-    release(c, x, v, c.hold(x, f), c.local::<BUMP>(x))
+    release::<R, BUMP>(c, x, v, c.hold(x, f), c.local::<BUMP>(x))
 }
 
 /// The breakaway guards of a stopped axis at `x` with holding force `hold`
@@ -74,10 +75,19 @@ pub(crate) fn resolve<R: Real, const BUMP: bool>(
 /// `x > min`), with the breakaway levels `(Bp, Bn)` of `c` at `x` (the step's, load share
 /// included, plus `b`), the larger positive margin winning (positive on a tie); the release
 /// stands only if the acceleration `(hold - friction) / inertia` then has the direction's
-/// sign. Returns the mode and the acceleration (0 when it stays stopped).
-#[inline]
-pub(crate) fn release<R: Real>(c: &Coeffs<R>, x: R, v: R, hold: R, b: Option<R>) -> (Mode, R) {
-    let Some(dir) = breakaway(c, x, hold, b) else {
+/// sign. Returns the mode and the acceleration (0 when it stays stopped). Out of line: it
+/// runs only when a guard opens, and inlined it made the usual steps dearer.
+#[inline(never)]
+pub(crate) fn release<R: Real, const BUMP: bool>(
+    c: &Coeffs<R>,
+    x: R,
+    v: R,
+    hold: R,
+    b: Option<R>,
+) -> (Mode, R) {
+    // `None` without a bump, known to the compiler (no test in the bump-free step).
+    let b = if BUMP { b } else { None };
+    let Some(dir) = breakaway::<R, BUMP>(c, x, hold, b) else {
         return (Mode::Stopped, R::ZERO);
     };
     // The same bits as `c.accel(x, v, dir, f)`: `hold` is `c.hold(x, f)`, `b` is
@@ -99,8 +109,13 @@ pub(crate) fn release<R: Real>(c: &Coeffs<R>, x: R, v: R, hold: R, b: Option<R>)
 /// `None`: it holds (and [`release`] returns `Stopped`), decided without evaluating the
 /// friction.
 #[inline]
-pub(crate) fn breakaway<R: Real>(c: &Coeffs<R>, x: R, hold: R, b: Option<R>) -> Option<Mode> {
-    let (bp, bn) = c.breakaway_at(b);
+pub(crate) fn breakaway<R: Real, const BUMP: bool>(
+    c: &Coeffs<R>,
+    x: R,
+    hold: R,
+    b: Option<R>,
+) -> Option<Mode> {
+    let (bp, bn) = c.breakaway_at(if BUMP { b } else { None });
     let mut best: Option<(Mode, R)> = None;
     if x < c.max {
         let m = hold - bp;
@@ -243,7 +258,7 @@ pub(crate) fn step<R: Real, const BUMP: bool>(
     let mut report = DriveReport::default();
     let mut done = R::ZERO;
     let (mut mode, mut a1) = match (mode0, hold0) {
-        (Mode::Stopped, Some(hold)) => release(c, x, v, hold, c.local::<BUMP>(x)),
+        (Mode::Stopped, Some(hold)) => release::<R, BUMP>(c, x, v, hold, c.local::<BUMP>(x)),
         _ => resolve::<R, BUMP>(c, x, v, mode0, f),
     };
     for seg in 0..DRIVE_MAX_SEGMENTS {
