@@ -312,7 +312,11 @@ def summarise(rows: list) -> dict:
             "sync_right": sum(r["right"] for r in sy), "sync_total": len(sy),
             "async_right": sum(r["right"] for r in asy), "async_total": len(asy),
             "named": sum(bool(r.get("named")) for r in rs),
+            "verdict_none": sum(r["verdict"] == "none" for r in rs),
+            "verdict_unexplained": sum(r["verdict"] == "unexplained" for r in rs),
+            "verdict_other_cause": sum(r["verdict"] not in (None, "none", "unexplained", c) for r in rs),
             "errors": sum(r["error"] is not None for r in rs),
+            "seconds_total": round(sum(r["seconds"] for r in rs), 1),
         }
     tot = {
         "right": sum(r["right"] for r in rows), "total": len(rows),
@@ -331,14 +335,17 @@ def markdown(rows: list, summ: dict, meta: dict) -> str:
     L = ["# crane diagnose on stranger rigs", ""]
     L.append(f"binary `{meta['binary']}`, {meta['cases']} cases, generation {meta['gen_seconds']:.1f} s, "
              f"scoring {meta['score_seconds']:.1f} s with {meta['jobs']} jobs")
-    L += ["", "| cause | right / total | sync | async | named first | tool errors |",
-          "|---|---|---|---|---|---|"]
+    L += ["", "| cause | right / total | sync | async | named first | verdict none | unexplained | other cause | tool errors | tool s |",
+          "|---|---|---|---|---|---|---|---|---|---|"]
     for c, s in summ["per_cause"].items():
         L.append(f"| {c} | {s['right']} / {s['total']} | {s['sync_right']} / {s['sync_total']} | "
-                 f"{s['async_right']} / {s['async_total']} | {s['named']} | {s['errors']} |")
+                 f"{s['async_right']} / {s['async_total']} | {s['named']} | {s['verdict_none']} | "
+                 f"{s['verdict_unexplained']} | {s['verdict_other_cause']} | {s['errors']} | {s['seconds_total']} |")
     t = summ["total"]
     L.append(f"| **total** | **{t['right']} / {t['total']}** | {t['sync_right']} / {t['sync_total']} | "
-             f"{t['async_right']} / {t['async_total']} | | {t['errors']} |")
+             f"{t['async_right']} / {t['async_total']} | | | | | {t['errors']} | |")
+    L.append("")
+    L.append("named first: the verdict is the true cause, whatever its parameter (for `none`: verdict `none`).")
     L += ["", f"Honesty failures: {t['honesty_failures']}", ""]
     for r in rows:
         for h in r["honesty"]:
@@ -402,7 +409,7 @@ def main(argv=None):
             "jobs": a.jobs}
     md = markdown(rows, summ, meta)
     print()
-    print("\n".join(md.splitlines()[2 : 6 + len(summ["per_cause"]) + 1]))
+    print("\n".join(md.splitlines()[2 : 6 + len(summ["per_cause"]) + 3]))
     t = summ["total"]
     print(f"\nhonesty failures: {t['honesty_failures']}")
     for r in rows:
