@@ -45,7 +45,7 @@ RATES = np.array([100, 200, 250, 500, 1000, 2000, 5000, 10000], dtype=float)
 RATE_W = np.array([0.07, 0.16, 0.12, 0.20, 0.20, 0.15, 0.05, 0.05])
 
 EFFECT_MIN = 0.05  # held-out position NMAE the effect must make
-MAX_ATTEMPTS = 10
+MAX_ATTEMPTS = 24
 GUARD_STEP = 0.01  # the operator's rough mental model of the rig steps at 10 ms
 
 
@@ -295,8 +295,9 @@ def draw_case(cause: str, index: int, attempt: int) -> Case:
         hard = 0.5
     tau = _logu(rng, 0.03, 0.6)  # J / Dv: peak speed within about 3 tau = 0.09-1.8 s
     cfrac = rng.uniform(0.02, 0.25)
-    if cause == "localized_friction":
-        cfrac = rng.uniform(0.12, 0.25)  # a bump on a weak friction hardly moves the position
+    if cause in ("localized_friction", "stiction", "stribeck_friction"):
+        # a bump or a breakaway peak on a weak friction hardly moves the position
+        cfrac = rng.uniform(0.1, 0.25)
     # plausible drives: at least 0.5 N (linear) / 0.01 N m (rotary) at full command; a light
     # axis is then a fast one (vmax up first, then a shorter time constant)
     fmin = 0.01 if rotary else 0.5
@@ -700,7 +701,7 @@ def generate(out_dir: str, only: str | None = None, ncases: int | None = None, v
     passno = 0
     while pending:
         passno += 1
-        K = 1 if passno == 1 else (3 if passno == 2 else 6)
+        K = 1 if passno == 1 else (4 if passno == 2 else 8)
         cases = []
         for (c, i), att in pending.items():
             for a in range(att, min(att + K, MAX_ATTEMPTS)):

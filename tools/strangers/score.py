@@ -20,7 +20,7 @@ import re
 import subprocess
 import sys
 import time
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor, as_completed
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
@@ -397,13 +397,18 @@ def main(argv=None):
         return score_case(truths[d], res)
 
     with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
-        for r in ex.map(one, dirs):
+        # the likely slow ones (asynchronous, many rows) first: a shorter makespan
+        order = sorted(dirs, key=lambda d: (not truths[d]["asynchronous"], -truths[d].get("rows", 0)))
+        futs = [ex.submit(one, d) for d in order]
+        for fut in as_completed(futs):
+            r = fut.result()
             rows.append(r)
             rep = r["error"] or r["detail"]
             print(f"{r['case']}  {r['cause']:<24} {r['truth_param']:<40} -> {str(r['verdict']):<24} "
                   f"{rep[:70]:<70} {'RIGHT' if r['right'] else 'wrong'} {r['seconds']:6.2f}s"
                   + (f"  [{r['note']}]" if r.get("note") else ""), flush=True)
     score_s = time.time() - t1
+    rows.sort(key=lambda r: r["case"])
     summ = summarise(rows)
     meta = {"binary": binary, "cases": len(rows), "gen_seconds": gen_s, "score_seconds": score_s,
             "jobs": a.jobs}

@@ -3,7 +3,8 @@
     CRANE_BIN=target/release/crane python3 -m pytest -q tools/strangers/test_strangers.py
 
 The sweep (generation + scoring of every case) runs when the crane binary exists; set
-STRANGERS_CASES=N to score only the first N cases (causes interleaved).
+STRANGERS_CASES=N to score only the first N cases (causes interleaved), STRANGERS_TIMEOUT=S
+for the per-case timeout (default 300 s; a timeout fails `test_every_case_ran`).
 """
 
 from __future__ import annotations
@@ -236,6 +237,8 @@ def sweep(tmp_path_factory):
     args = ["--out", str(out), "--jobs", "2", "--json", str(out / "summary.json")]
     if n:
         args += ["--cases", n]
+    if os.environ.get("STRANGERS_TIMEOUT"):
+        args += ["--timeout", os.environ["STRANGERS_TIMEOUT"]]
     assert S.main(args) == 0
     return json.load(open(out / "summary.json"))
 
