@@ -1,7 +1,7 @@
 """Score `crane diagnose` on the stranger cases.
 
     python3 tools/strangers/score.py --out DIR [--cases N | --only CAUSE] [--jobs 2]
-        [--markdown PATH] [--json PATH] [--timeout 300] [--no-generate]
+        [--markdown PATH] [--json PATH] [--timeout 300] [--no-generate [--reuse-reports]]
 
 Generates the cases into DIR (cases.py; same master seed, same cases), runs
 `$CRANE_BIN diagnose DIR/<case>/data --json DIR/<case>/report.json` on each (CRANE_BIN
@@ -28,6 +28,12 @@ REPO = os.path.dirname(os.path.dirname(HERE))
 
 TOL = 0.25  # relative tolerance of a main parameter
 NMAE_LIMIT_PCT = 1e4  # an NMAE figure above this (percent) is a diverged simulation
+# a finding's text admitting that a value sits at the end of the range the tool searched
+EDGE_RE = re.compile(
+    r"\bedge\b|\b(largest|smallest|highest|lowest|first|last) (value|level|delay|width)s? tried"
+    r"|\bat the (upper|lower) (end|bound|limit)\b",
+    re.I,
+)
 
 
 def crane_bin() -> str:
@@ -35,6 +41,26 @@ def crane_bin() -> str:
     if not os.path.isabs(b):
         b = os.path.join(REPO, b)
     return b
+
+
+def load_run(case_dir: str) -> dict | None:
+    """The tool's earlier run of this case (--reuse-reports), or None."""
+    try:
+        with open(os.path.join(case_dir, "tool_run.json")) as f:
+            meta = json.load(f)
+        with open(os.path.join(case_dir, "tool_stderr.txt")) as f:
+            err = f.read()
+    except (OSError, ValueError):
+        return None
+    report, report_error = None, ""
+    if meta["rc"] == 0:
+        try:
+            with open(os.path.join(case_dir, "report.json")) as f:
+                report = json.load(f)
+        except (OSError, ValueError) as e:
+            report_error = f"no readable report: {e}"
+    return {"rc": meta["rc"], "timed_out": meta["timed_out"], "seconds": meta["seconds"],
+            "stderr": err, "report": report, "report_error": report_error}
 
 
 def run_case(case_dir: str, binary: str, timeout: float) -> dict:
@@ -59,6 +85,8 @@ def run_case(case_dir: str, binary: str, timeout: float) -> dict:
         if isinstance(err, bytes):
             err = err.decode(errors="replace")
     dt = time.time() - t0
+    with open(os.path.join(case_dir, "tool_run.json"), "w") as f:
+        json.dump({"rc": rc, "timed_out": timed_out, "seconds": dt, "timeout": timeout}, f)
     with open(os.path.join(case_dir, "tool_stdout.txt"), "w") as f:
         f.write(out)
     with open(os.path.join(case_dir, "tool_stderr.txt"), "w") as f:
@@ -116,7 +144,7 @@ def honesty(report: dict) -> list:
             if v is None or (x is not None and not math.isfinite(x)):
                 fails.append(f"findings[{i}].parameters.{k}: non-finite value {v!r}")
         for path, v in _walk(fnd):
-            if isinstance(v, str) and re.search(r"\bedge\b", v, re.I):
+            if isinstance(v, str) and EDGE_RE.search(v):
                 fails.append(f"findings[{i}] ({fnd.get('cause')}): note at a grid edge: {v[:160]!r}")
         if fnd.get("cause") == "input_delay":
             ps = fnd.get("parameters") or {}
@@ -371,9 +399,13 @@ def main(argv=None):
     ap.add_argument("--markdown", default=None)
     ap.add_argument("--json", dest="json_out", default=None)
     ap.add_argument("--no-generate", action="store_true", help="score the cases already in --out")
+    ap.add_argument("--reuse-reports", action="store_true",
+                    help="with --no-generate: score the reports of an earlier run instead of running the tool")
     a = ap.parse_args(argv)
 
     binary = crane_bin()
+    if a.reuse_reports and not a.no_generate:
+        ap.error("--reuse-reports needs --no-generate")
     if not os.path.exists(binary):
         print(f"error: crane binary not found at {binary} (set CRANE_BIN)", file=sys.stderr)
         return 2
@@ -393,7 +425,9 @@ def main(argv=None):
     rows = []
 
     def one(d):
-        res = run_case(os.path.join(a.out, d), binary, a.timeout)
+        res = load_run(os.path.join(a.out, d)) if a.reuse_reports else None
+        if res is None:
+            res = run_case(os.path.join(a.out, d), binary, a.timeout)
         return score_case(truths[d], res)
 
     with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
