@@ -478,6 +478,39 @@ def draw_case(cause: str, index: int, attempt: int) -> Case:
     return case
 
 
+def applied_command(case: Case, r: Run) -> tuple:
+    """(command, its period, sub-steps) the plant is driven by.
+
+    Synchronous logs: the operator's command, updated every log period. Asynchronous logs: the
+    command is published (and logged) only on the rows where `u` is refreshed, at their jittered
+    stamps; the drive applies it from the first internal step at or after that stamp (a latency
+    of at most one internal step, T/4 or less) and holds it until the next publication. So the
+    logged `u` is the applied input (plus noise): nothing the drive saw is missing from the log.
+    """
+    T = 1.0 / case.rate
+    if not case.asynchronous:
+        return r.cmd, T, 0
+    n = len(r.cmd)
+    nsub = P.auto_nsub(T, True)
+    h = T / nsub
+    _, _, eu, pu = case.refresh
+    fresh = np.flatnonzero(P.refresh_mask(n, eu, pu))
+    vals = r.cmd[np.minimum((r.stamps[fresh] / T + 1e-9).astype(np.int64), n - 1)]
+    kstart = np.ceil(r.stamps[fresh] / h - 1e-9).astype(np.int64)  # first step at/after the stamp
+    fine = np.zeros(n * nsub)
+    idx = np.searchsorted(kstart, np.arange(n * nsub), side="right") - 1
+    ok = idx >= 0
+    fine[ok] = vals[idx[ok]]
+    return fine, h, 1
+
+
+def logged_input(case: Case, r: Run) -> np.ndarray:
+    """The command value logged on each row (before noise): the one in force at the stamp, or
+    (asynchronous logs) the one published on that row."""
+    T = 1.0 / case.rate
+    return r.cmd[np.minimum((r.stamps / T + 1e-9).astype(np.int64), len(r.cmd) - 1)]
+
+
 def crossings(x: np.ndarray, c: float) -> int:
     s = np.sign(x - c)
     s = s[s != 0]
@@ -563,8 +596,7 @@ def write_case(case: Case, xs: list, out_dir: str, effect: float | None):
     for r, x in zip(case.runs, xs):
         n = len(r.stamps)
         xq = P.quantise(x + rng.normal(0, 1, n) * case.x_noise, case.quantum) / case.pos_scale
-        ci = np.minimum((r.stamps / T + 1e-9).astype(np.int64), len(r.cmd) - 1)
-        ulog = r.cmd[ci] + rng.normal(0, 1, n) * case.u_noise
+        ulog = logged_input(case, r) + rng.normal(0, 1, n) * case.u_noise
         t = r.stamps + case.t0
         xs_txt = [fmt_num(v) for v in xq]
         us_txt = [f"{v:.7g}" for v in ulog]
@@ -712,10 +744,11 @@ def generate(out_dir: str, only: str | None = None, ncases: int | None = None, v
         where = []
         for ci, cs in enumerate(cases):
             for ri, r in enumerate(cs.runs):
-                lanes.append(P.Lane(plant=cs.plant, cmd=r.cmd, T=1.0 / cs.rate, stamps=r.stamps, x0=r.x0))
+                ucmd, Tl, nsub = applied_command(cs, r)
+                lanes.append(P.Lane(plant=cs.plant, cmd=ucmd, T=Tl, stamps=r.stamps, x0=r.x0, n_sub=nsub))
                 where.append((ci, ri, False))
                 if cs.removed is not None and r.kind == "validation":
-                    lanes.append(P.Lane(plant=cs.removed, cmd=r.cmd, T=1.0 / cs.rate, stamps=r.stamps, x0=r.x0))
+                    lanes.append(P.Lane(plant=cs.removed, cmd=ucmd, T=Tl, stamps=r.stamps, x0=r.x0, n_sub=nsub))
                     where.append((ci, ri, True))
         t0 = time.time()
         P.simulate(lanes)

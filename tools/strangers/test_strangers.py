@@ -269,3 +269,19 @@ def test_per_cause_floors(sweep):
         if s["right"] / s["total"] < FLOORS.get(c, 0.0):
             low.append((c, s["right"], s["total"], FLOORS[c]))
     assert not low, low
+
+
+def test_async_input_is_what_the_log_shows():
+    # asynchronous logs: the drive applies each published command from its stamp on (at most
+    # one internal step later) until the next one; the rows in between show the same value
+    cs = C.draw_case("none", 1, 0)
+    assert cs.asynchronous
+    r = cs.runs[0]
+    u, h, nsub = C.applied_command(cs, r)
+    assert nsub == 1 and h <= (1.0 / cs.rate) / P.MIN_SUB_ASYNC + 1e-15
+    _, _, eu, pu = cs.refresh
+    fresh = P.refresh_mask(len(r.cmd), eu, pu)
+    shown = P.hold(C.logged_input(cs, r), fresh)  # the held u column, noise aside
+    k = np.ceil(r.stamps / h - 1e-9).astype(int)  # the first internal step after each stamp
+    k = np.minimum(k, len(u) - 1)
+    assert np.array_equal(u[k][1:-1], shown[1:-1])
