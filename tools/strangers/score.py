@@ -157,6 +157,32 @@ def honesty(report: dict) -> list:
     return fails
 
 
+def suspicious(report: dict) -> list:
+    """Findings with unphysical parameters (reported, not asserted): a stiction ratio below 1,
+    a Stribeck static level below the sliding one, a negative amplitude, dead band, saturation,
+    stiffness or mu."""
+    out = []
+    for i, fnd in enumerate(report.get("findings") or []):
+        c, ps = fnd.get("cause"), fnd.get("parameters") or {}
+        num = {k: _num(v) for k, v in ps.items()}
+        if c == "stiction":
+            for d in ("pos", "neg"):
+                r = num.get(f"ratio_{d}")
+                if r is not None and r < 1.0:
+                    out.append(f"findings[{i}] stiction: ratio_{d} = {r:.4g} < 1")
+        if c == "stribeck_friction":
+            for d in ("pos", "neg"):
+                st, sl = num.get(f"static_{d}"), num.get(f"sliding_{d}")
+                if st is not None and sl is not None and st < sl:
+                    out.append(f"findings[{i}] stribeck_friction: static_{d} {st:.4g} < sliding_{d} {sl:.4g}")
+        for k in ("amplitude_n", "width_m", "deadband", "saturation", "stiffness", "mu", "delay_s",
+                  "stribeck_velocity"):
+            v = num.get(k)
+            if v is not None and v < 0:
+                out.append(f"findings[{i}] {c}: {k} = {v:.4g} < 0")
+    return out
+
+
 # ---------------------------------------------------------------------------------------------
 # Scoring one case
 
@@ -197,7 +223,7 @@ def score_case(truth: dict, res: dict) -> dict:
     m = truth["main"]
     out = {"case": truth["case_id"], "cause": cause, "asynchronous": truth["asynchronous"],
            "seconds": round(res["seconds"], 2), "right": False, "verdict": None, "detail": "",
-           "truth_param": "", "error": None, "honesty": [], "extra": {}}
+           "truth_param": "", "error": None, "honesty": [], "warnings": [], "extra": {}}
     out["truth_param"] = truth_param_text(truth)
     if res["timed_out"]:
         out["error"] = "timeout"
@@ -210,6 +236,7 @@ def score_case(truth: dict, res: dict) -> dict:
         return out
     rep = res["report"]
     out["honesty"] = honesty(rep)
+    out["warnings"] = suspicious(rep)
     verdict = rep.get("verdict")
     out["verdict"] = verdict
     findings = rep.get("findings") or []
@@ -355,6 +382,7 @@ def summarise(rows: list) -> dict:
         "errors": sum(r["error"] is not None for r in rows),
         "timeouts": sum(r["error"] == "timeout" for r in rows),
         "honesty_failures": sum(len(r["honesty"]) for r in rows),
+        "unphysical_warnings": sum(len(r.get("warnings", [])) for r in rows),
     }
     return {"per_cause": per, "total": tot}
 
@@ -378,6 +406,11 @@ def markdown(rows: list, summ: dict, meta: dict) -> str:
     for r in rows:
         for h in r["honesty"]:
             L.append(f"- {r['case']} ({r['cause']}): {h}")
+    nw = sum(len(r.get("warnings", [])) for r in rows)
+    L += ["", f"Unphysical finding parameters (not asserted): {nw}", ""]
+    for r in rows:
+        for w in r.get("warnings", []):
+            L.append(f"- {r['case']} ({r['cause']}): {w}")
     L += ["", "| case | truth | log | verdict | reported | right | s |", "|---|---|---|---|---|---|---|"]
     for r in rows:
         rep = r["error"] or (r["detail"] + (f" ({r['note']})" if r.get("note") else ""))
@@ -454,6 +487,9 @@ def main(argv=None):
     for r in rows:
         for h in r["honesty"]:
             print(f"  {r['case']} ({r['cause']}): {h}")
+    for r in rows:
+        for w in r.get("warnings", []):
+            print(f"  unphysical (not asserted) {r['case']} ({r['cause']}): {w}")
     print(f"generation {gen_s:.1f} s, scoring {score_s:.1f} s")
     if a.markdown:
         with open(a.markdown, "w") as f:
