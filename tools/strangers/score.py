@@ -134,9 +134,9 @@ def honesty(report: dict) -> list:
         key = path.rsplit(".", 1)[-1]
         if "nmae" in key.lower():
             x = _num(v)
-            if v is None:
-                fails.append(f"{path}: null NMAE figure (a non-finite value?)")
-            elif x is not None and (not math.isfinite(x) or x > NMAE_LIMIT_PCT):
+            # null is how the report marks a diverged simulation (REPORT_SCHEMA.md: no figure,
+            # `diverged_*` flags beside it); only a printed figure can be dishonest
+            if x is not None and (not math.isfinite(x) or x > NMAE_LIMIT_PCT):
                 fails.append(f"{path}: NMAE figure {v!r} (non-finite or above {NMAE_LIMIT_PCT:g} %)")
     for i, fnd in enumerate(report.get("findings") or []):
         for k, v in (fnd.get("parameters") or {}).items():
