@@ -4,7 +4,9 @@
 
 The sweep (generation + scoring of every case) runs when the crane binary exists; set
 STRANGERS_CASES=N to score only the first N cases (causes interleaved), STRANGERS_TIMEOUT=S
-for the per-case timeout (default 300 s; a timeout fails `test_every_case_ran`).
+for the per-case timeout (default 300 s; a timeout fails `test_every_case_ran`);
+STRANGERS_SWEEP=0 skips the sweep (CI, until the workbench passes its honesty checks on it:
+issue 20).
 """
 
 from __future__ import annotations
@@ -234,6 +236,8 @@ def test_cases_are_seeded_and_cover_the_plan():
 
 @pytest.fixture(scope="module")
 def sweep(tmp_path_factory):
+    if os.environ.get("STRANGERS_SWEEP") == "0":
+        pytest.skip("STRANGERS_SWEEP=0: the plant's own tests only")
     binary = S.crane_bin()
     if not os.path.exists(binary):
         pytest.skip(f"crane binary absent at {binary} (set CRANE_BIN)")
