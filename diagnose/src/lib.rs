@@ -172,6 +172,32 @@ pub enum Baseline {
     Symmetric,
 }
 
+/// The first line of every plot `crane diagnose` writes: a later run may replace a file that
+/// starts with it, and nothing else without `--force` ([`foreign_plot`]).
+pub const PLOT_MARK: &str = "<!-- written by crane diagnose -->\n";
+
+/// The first `.svg` file in `dir` that `crane diagnose` did not write (it does not start with
+/// [`PLOT_MARK`]): a user's own figure, which a run with `--plots dir` must not replace
+/// without `--force`. `None` when the folder is missing or holds only the tool's plots.
+pub fn foreign_plot(dir: &std::path::Path) -> Option<PathBuf> {
+    use std::io::Read;
+    let entries = std::fs::read_dir(dir).ok()?;
+    let mut names: Vec<PathBuf> = entries
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x == "svg"))
+        .collect();
+    names.sort();
+    names.into_iter().find(|p| {
+        let mut head = vec![0u8; PLOT_MARK.len()];
+        let ours = std::fs::File::open(p)
+            .and_then(|mut f| f.read_exact(&mut head))
+            .is_ok()
+            && head == PLOT_MARK.as_bytes();
+        !ours
+    })
+}
+
 /// Options of [`diagnose`].
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct DiagnoseOptions {

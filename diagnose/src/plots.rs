@@ -73,7 +73,8 @@ fn scatter(x: &[f64], ys: &[(&[f64], &str)], title: &str) -> String {
 /// Writes `<name>_vs_{time,position,velocity}.svg` per series (crane axes, or the single-axis
 /// closed-loop force residuals).
 pub fn crane_plots(dir: &Path, series: &[Series]) -> Result<(), DiagnoseError> {
-    std::fs::create_dir_all(dir).map_err(|e| DiagnoseError::Io(e.to_string()))?;
+    crane_ident::atomic::create_dir(dir)
+        .map_err(|e| DiagnoseError::Io(format!("{}: {e}", dir.display())))?;
     for s in series {
         let ys: Vec<(&[f64], &str)> = [(s.before.as_slice(), "red"), (s.after.as_slice(), "blue")]
             .into_iter()
@@ -81,8 +82,9 @@ pub fn crane_plots(dir: &Path, series: &[Series]) -> Result<(), DiagnoseError> {
             .collect();
         for (tag, x) in [("time", &s.t), ("position", &s.q), ("velocity", &s.v)] {
             let svg = scatter(x, &ys, &format!("{} residual vs {tag}", s.name));
-            std::fs::write(dir.join(format!("{}_vs_{tag}.svg", s.name)), svg)
-                .map_err(|e| DiagnoseError::Io(e.to_string()))?;
+            let path = dir.join(format!("{}_vs_{tag}.svg", s.name));
+            crane_ident::atomic::write(&path, format!("{}{svg}", crate::PLOT_MARK))
+                .map_err(|e| DiagnoseError::Io(format!("{}: {e}", path.display())))?;
         }
     }
     Ok(())

@@ -3,6 +3,13 @@
 //! old file or the new one, never a truncated mix; a full disk or a crash leaves the old file
 //! in place (and at worst a stray `.<name>.tmp-<pid>-<n>` file, removed on the error paths we
 //! see).
+//!
+//! **Only a regular file or a missing path is ever replaced** ([`Destination`]). A character
+//! device or a FIFO (`/dev/null`, `/dev/full`, a named pipe a reader waits on) is written
+//! through, in place: renaming over it would turn the device node into a regular file (as
+//! root) or cut the pipe's reader off. A symbolic link is refused with an error that names
+//! its target (replacing it would break the link; following it silently would write
+//! somewhere the user did not name). A directory, a block device or a socket is refused.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -25,10 +32,89 @@ pub fn temp_beside(path: &Path) -> PathBuf {
     }
 }
 
+/// What is at a destination path, and so how it is written.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Destination {
+    /// Nothing, or a regular file: written atomically (temporary file, rename).
+    Replace,
+    /// A character device or a FIFO: written through in place (never renamed over).
+    WriteThrough,
+}
+
+/// Classifies `path` without following a symbolic link: a missing path or a regular file is
+/// [`Destination::Replace`], a character device or a FIFO [`Destination::WriteThrough`];
+/// anything else (a symbolic link, a directory, a block device, a socket) is an error that
+/// says what it is.
+pub fn destination(path: &Path) -> std::io::Result<Destination> {
+    let meta = match std::fs::symlink_metadata(path) {
+        Ok(m) => m,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Destination::Replace),
+        Err(e) => return Err(e),
+    };
+    let ft = meta.file_type();
+    if ft.is_file() {
+        return Ok(Destination::Replace);
+    }
+    let refuse = |what: String| {
+        Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!("{} is {what}; refusing to replace it", path.display()),
+        ))
+    };
+    if ft.is_symlink() {
+        let target = std::fs::read_link(path)
+            .map(|t| t.display().to_string())
+            .unwrap_or_else(|_| "?".into());
+        return refuse(format!(
+            "a symbolic link to {target} (name the target itself, or another path)"
+        ));
+    }
+    if ft.is_dir() {
+        return refuse("a directory (name a file)".into());
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if ft.is_char_device() || ft.is_fifo() {
+            return Ok(Destination::WriteThrough);
+        }
+        if ft.is_block_device() {
+            return refuse("a block device".into());
+        }
+        if ft.is_socket() {
+            return refuse("a socket".into());
+        }
+    }
+    refuse("not a regular file".into())
+}
+
+/// Creates the output directory `dir` and its parents; an existing path that is not a
+/// directory is an error that says so (`create_dir_all` says only "File exists").
+pub fn create_dir(dir: &Path) -> std::io::Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::AlreadyExists,
+            "exists and is not a directory: an output folder is needed here",
+        ));
+    }
+    std::fs::create_dir_all(dir)
+}
+
+/// Opens a device or FIFO for writing in place (no create, no truncate of anything else).
+fn open_through(path: &Path) -> std::io::Result<std::fs::File> {
+    std::fs::OpenOptions::new().write(true).open(path)
+}
+
 /// Writes `bytes` to `path` atomically (temporary file in the same directory, `fsync`,
 /// rename). The parent directory must exist. On error the destination is unchanged and the
-/// temporary file is removed.
+/// temporary file is removed. A character device or FIFO is written through in place, and
+/// anything that is not a regular file or a missing path is refused ([`destination`]).
 pub fn write(path: &Path, bytes: impl AsRef<[u8]>) -> std::io::Result<()> {
+    if destination(path)? == Destination::WriteThrough {
+        let mut f = open_through(path)?;
+        f.write_all(bytes.as_ref())?;
+        return f.flush();
+    }
     let tmp = temp_beside(path);
     let result = (|| {
         let mut f = std::fs::File::create(&tmp)?;
@@ -47,18 +133,28 @@ pub fn write(path: &Path, bytes: impl AsRef<[u8]>) -> std::io::Result<()> {
 /// beside the destination; [`AtomicFile::commit`] flushes it to disk and renames it over the
 /// destination. Dropped without `commit` (an error on the way), the temporary file is removed
 /// and the destination is untouched.
+/// A character device or a FIFO is written through in place instead ([`destination`]): no
+/// temporary file, `commit` only flushes.
 #[derive(Debug)]
 pub struct AtomicFile {
     path: PathBuf,
-    tmp: PathBuf,
+    /// The temporary file; `None` when writing through to a device or FIFO.
+    tmp: Option<PathBuf>,
     file: Option<std::io::BufWriter<std::fs::File>>,
 }
 
 impl AtomicFile {
-    /// Starts writing `path` (its directory must exist).
+    /// Starts writing `path` (its directory must exist); refuses what [`destination`]
+    /// refuses.
     pub fn create(path: &Path) -> std::io::Result<AtomicFile> {
-        let tmp = temp_beside(path);
-        let file = std::fs::File::create(&tmp)?;
+        let (tmp, file) = match destination(path)? {
+            Destination::WriteThrough => (None, open_through(path)?),
+            Destination::Replace => {
+                let tmp = temp_beside(path);
+                let file = std::fs::File::create(&tmp)?;
+                (Some(tmp), file)
+            }
+        };
         Ok(AtomicFile {
             path: path.to_path_buf(),
             tmp,
@@ -66,13 +162,19 @@ impl AtomicFile {
         })
     }
 
-    /// Flushes, syncs and renames the temporary file over the destination.
+    /// Flushes, syncs and renames the temporary file over the destination (a device or FIFO:
+    /// flushes).
     pub fn commit(mut self) -> std::io::Result<()> {
         if let Some(w) = self.file.take() {
             let f = w.into_inner().map_err(|e| e.into_error())?;
-            f.sync_all()?;
+            if self.tmp.is_some() {
+                f.sync_all()?;
+            }
         }
-        std::fs::rename(&self.tmp, &self.path)
+        match &self.tmp {
+            Some(tmp) => std::fs::rename(tmp, &self.path),
+            None => Ok(()),
+        }
     }
 }
 
@@ -95,7 +197,9 @@ impl Write for AtomicFile {
 impl Drop for AtomicFile {
     fn drop(&mut self) {
         // not committed (or the rename failed): the temporary file goes
-        let _ = std::fs::remove_file(&self.tmp);
+        if let Some(tmp) = &self.tmp {
+            let _ = std::fs::remove_file(tmp);
+        }
     }
 }
 
@@ -149,6 +253,58 @@ mod tests {
         assert_eq!(std::fs::read_to_string(&p).unwrap(), "old");
         let n = std::fs::read_dir(&dir).unwrap().count();
         assert_eq!(n, 2, "a temporary file was left behind");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn devices_are_written_through_and_links_refused() {
+        use std::os::unix::fs::FileTypeExt;
+        // /dev/null stays a character device (renamed over, as root it became a file)
+        write(Path::new("/dev/null"), "x").unwrap();
+        let mut f = AtomicFile::create(Path::new("/dev/null")).unwrap();
+        f.write_all(b"y").unwrap();
+        f.commit().unwrap();
+        let ft = std::fs::symlink_metadata("/dev/null").unwrap().file_type();
+        assert!(ft.is_char_device(), "/dev/null is no longer a device");
+        // a full device reports its error instead of being replaced
+        if Path::new("/dev/full").exists() {
+            let e = write(Path::new("/dev/full"), "x").unwrap_err();
+            assert_eq!(e.raw_os_error(), Some(28), "{e}");
+            let ft = std::fs::symlink_metadata("/dev/full").unwrap().file_type();
+            assert!(ft.is_char_device());
+        }
+        let dir = std::env::temp_dir().join(format!("crane-atomic-dev-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let target = dir.join("target.txt");
+        write(&target, "kept").unwrap();
+        let link = dir.join("link.txt");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        let e = write(&link, "new").unwrap_err();
+        assert!(e.to_string().contains("symbolic link"), "{e}");
+        assert!(AtomicFile::create(&link).is_err());
+        assert!(std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        assert_eq!(std::fs::read_to_string(&target).unwrap(), "kept");
+        // a FIFO with a reader gets the bytes, and stays a FIFO
+        let fifo = dir.join("pipe");
+        let ok = std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .is_ok_and(|s| s.success());
+        if ok {
+            let f2 = fifo.clone();
+            let reader = std::thread::spawn(move || std::fs::read_to_string(f2).unwrap());
+            write(&fifo, "through").unwrap();
+            assert_eq!(reader.join().unwrap(), "through");
+            let ft = std::fs::symlink_metadata(&fifo).unwrap().file_type();
+            assert!(ft.is_fifo(), "the FIFO was replaced");
+        }
+        let e = write(&dir, "x").unwrap_err();
+        assert!(e.to_string().contains("directory"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -48,6 +48,7 @@ pub mod campaign;
 pub mod data;
 pub mod emps;
 pub mod identify;
+pub mod input;
 pub mod linalg;
 pub mod params_file;
 pub mod rig;

@@ -83,7 +83,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Params, ParamsError> {
 
 /// Reads and checks a parameter file.
 pub fn read(path: &Path) -> Result<Params, ParamsError> {
-    let text = std::fs::read_to_string(path).map_err(|source| ParamsError::Io {
+    let text = crate::input::read_text(path).map_err(|source| ParamsError::Io {
         path: path.to_path_buf(),
         source,
     })?;

@@ -674,3 +674,72 @@ fn a_folder_of_logs_without_a_description_says_what_to_write() {
     let e = load_dataset(&d.join("nowhere")).expect_err("no directory");
     assert!(!e.to_string().contains("DATA_FORMAT.md"), "{e}");
 }
+
+// ---- issue 22: inputs a user gets wrong without a word ------------------------------------
+
+#[test]
+fn a_run_listed_as_fitting_and_held_out_is_refused() {
+    let (d, e) = fails(
+        "[[runs]]\nfile = \"run.csv\"\nkind = \"other\"\n[[runs]]\nfile = \"./run.csv\"\nkind = \"validation\"\n",
+        &axis_csv(50, 0.01),
+    );
+    let m = e.to_string();
+    assert!(m.contains("listed twice") && m.contains("held out"), "{m}");
+    assert_eq!(e.location.line, Some(5), "{m}");
+    std::fs::remove_dir_all(d).unwrap();
+}
+
+#[test]
+fn an_explicit_empty_run_list_is_refused() {
+    let (d, e) = fails("runs = []\n", &axis_csv(50, 0.01));
+    let m = e.to_string();
+    assert!(m.contains("runs = []") && m.contains("[[runs]]"), "{m}");
+    std::fs::remove_dir_all(d).unwrap();
+    // left out, every *.csv is a run (as documented)
+    assert_eq!(ok("", &axis_csv(50, 0.01)).runs.len(), 1);
+}
+
+#[test]
+fn an_unknown_canonical_column_name_is_refused_with_the_known_ones() {
+    let (d, e) = fails("[columns]\npos = \"x\"\n", &axis_csv(50, 0.01));
+    let m = e.to_string();
+    assert!(m.contains("`pos`") && m.contains("force"), "{m}");
+    assert_eq!(e.location.line, Some(2), "{m}");
+    std::fs::remove_dir_all(d).unwrap();
+    let (d, e) = fails(
+        "[[runs]]\nfile = \"run.csv\"\ncolumns = { position = \"x\" }\n",
+        &axis_csv(50, 0.01),
+    );
+    assert!(e.to_string().contains("`position`"), "{e}");
+    std::fs::remove_dir_all(d).unwrap();
+}
+
+#[test]
+fn a_latin1_byte_is_refused_at_its_line_and_old_mac_endings_read() {
+    let d = temp_dir("latin1");
+    std::fs::write(d.join("dataset.toml"), "").unwrap();
+    let mut csv = b"# lab at 20 \xb0C\n".to_vec();
+    csv.extend_from_slice(axis_csv(50, 0.01).as_bytes());
+    std::fs::write(d.join("run.csv"), csv).unwrap();
+    let m = load_dataset(&d).expect_err("Latin-1").to_string();
+    assert!(m.contains("line 1, column 13") && m.contains("0xB0"), "{m}");
+    std::fs::remove_dir_all(d).unwrap();
+    let ds = ok("", &axis_csv(50, 0.01).replace('\n', "\r"));
+    assert_eq!(ds.runs[0].axis().unwrap().t.len(), 50);
+}
+
+#[cfg(unix)]
+#[test]
+fn a_run_file_that_is_a_fifo_is_refused_instead_of_waiting_forever() {
+    let d = temp_dir("fifo");
+    std::fs::write(d.join("dataset.toml"), "[[runs]]\nfile = \"pipe.csv\"\n").unwrap();
+    let made = std::process::Command::new("mkfifo")
+        .arg(d.join("pipe.csv"))
+        .status()
+        .is_ok_and(|s| s.success());
+    if made {
+        let m = load_dataset(&d).expect_err("a FIFO").to_string();
+        assert!(m.contains("FIFO") && m.contains("pipe.csv"), "{m}");
+    }
+    std::fs::remove_dir_all(d).unwrap();
+}

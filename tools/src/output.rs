@@ -33,7 +33,7 @@ pub enum OutputError {
         why: &'static str,
     },
     /// Creating a directory or writing failed.
-    #[error("write {path}: {source}")]
+    #[error("write {path}")]
     Io {
         /// The path being written.
         path: PathBuf,
@@ -140,7 +140,7 @@ impl Outputs {
 pub fn create_parent(out: &Path) -> Result<(), OutputError> {
     match out.parent() {
         Some(dir) if !dir.as_os_str().is_empty() => {
-            std::fs::create_dir_all(dir).map_err(|source| OutputError::Io {
+            crane_ident::atomic::create_dir(dir).map_err(|source| OutputError::Io {
                 path: dir.to_path_buf(),
                 source,
             })

@@ -228,8 +228,8 @@ pub fn simulate(
     }
     let (sc, base) = match scenario {
         Some(p) => {
-            let text =
-                std::fs::read_to_string(p).with_context(|| format!("read {}", p.display()))?;
+            let text = crane_ident::input::read_text(p)
+                .with_context(|| format!("read {}", p.display()))?;
             let sc: Scenario =
                 toml::from_str(&text).with_context(|| format!("scenario {}", p.display()))?;
             (sc, p.parent().map(Path::to_path_buf).unwrap_or_default())

@@ -239,6 +239,17 @@ pub fn diagnose(
     if let Some(r) = report_file {
         outputs.check(r)?;
     }
+    if let Some(user) = plots
+        .as_deref()
+        .filter(|_| !force)
+        .and_then(crane_diagnose::foreign_plot)
+    {
+        anyhow::bail!(
+            "{} was not written by crane diagnose; refusing to write plots beside it, where they \
+             could replace it (choose another --plots folder, or pass --force)",
+            user.display()
+        );
+    }
     let file = match params {
         Some(p) => Some(params_file::read(p).context("read parameters")?),
         None => None,

@@ -323,3 +323,62 @@ fn diagnose_cicese_json_file_and_plots() {
         assert!(String::from_utf8_lossy(&o.stdout).starts_with("verdict: "));
     }
 }
+
+/// Issue 22: outputs never replace what is not ours. A user's figure in the plots folder, a
+/// symbolic link, a device: refused or written through, each with one clear message.
+#[cfg(unix)]
+#[test]
+fn diagnose_outputs_leave_devices_links_and_user_files_alone() {
+    use std::os::unix::fs::FileTypeExt;
+    if crane_ident::shared_data::require("cicese").is_none() {
+        return;
+    }
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/cicese_joint2");
+    let ex = example.to_str().unwrap();
+    let d = tmp("not-ours");
+    // a user's own figure in the plots folder: refused before any work, kept
+    std::fs::create_dir_all(d.join("P")).unwrap();
+    std::fs::write(d.join("P/heldout_run2.svg"), "<svg>mine</svg>").unwrap();
+    let o = crane(&d, &["diagnose", ex, "--plots", "P"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("heldout_run2.svg") && stderr(&o).contains("--force"));
+    assert_eq!(
+        std::fs::read_to_string(d.join("P/heldout_run2.svg")).unwrap(),
+        "<svg>mine</svg>"
+    );
+    // a plots "folder" that is a file: said so, once
+    std::fs::write(d.join("F"), "a file").unwrap();
+    let o = crane(&d, &["diagnose", ex, "--plots", "F"]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert_eq!(e.matches("not a directory").count(), 1, "{e}");
+    assert_eq!(std::fs::read_to_string(d.join("F")).unwrap(), "a file");
+    // a symbolic link is not replaced
+    std::fs::write(d.join("target.json"), "kept").unwrap();
+    std::os::unix::fs::symlink(d.join("target.json"), d.join("link.json")).unwrap();
+    let o = crane(&d, &["diagnose", ex, "--report", "link.json"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("symbolic link"), "{}", stderr(&o));
+    assert!(std::fs::symlink_metadata(d.join("link.json"))
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    assert_eq!(
+        std::fs::read_to_string(d.join("target.json")).unwrap(),
+        "kept"
+    );
+    // devices are written through: /dev/null stays a device, /dev/full reports its error once
+    let o = crane(&d, &["diagnose", ex, "--report", "/dev/null"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let ft = std::fs::symlink_metadata("/dev/null").unwrap().file_type();
+    assert!(ft.is_char_device(), "/dev/null was replaced");
+    if Path::new("/dev/full").exists() {
+        let o = crane(&d, &["diagnose", ex, "--report", "/dev/full"]);
+        assert!(!o.status.success());
+        let e = stderr(&o);
+        assert_eq!(e.matches("No space left").count(), 1, "{e}");
+        let ft = std::fs::symlink_metadata("/dev/full").unwrap().file_type();
+        assert!(ft.is_char_device(), "/dev/full was replaced");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -58,7 +58,7 @@ pub fn write_all(
     th: &Thresholds,
     info: &DriveInfo,
 ) -> Result<(), Dyn> {
-    std::fs::create_dir_all(dir)?;
+    crane_ident::atomic::create_dir(dir)?;
     for (i, r) in held.iter().enumerate() {
         let path = dir.join(format!("heldout_{}.svg", stem(&r.run.name)));
         run_plot(&path, r, &baseline.sims[i], &final_.sims[i], th, info)?;
@@ -95,6 +95,7 @@ fn stick_intervals(r: &Prepared, th: &Thresholds) -> Vec<(f64, f64)> {
     out
 }
 
+/// Draws one held-out run's plot and writes it atomically to `path`.
 fn run_plot(
     path: &Path,
     r: &Prepared,
@@ -103,7 +104,21 @@ fn run_plot(
     th: &Thresholds,
     info: &DriveInfo,
 ) -> Result<(), Dyn> {
-    let root = SVGBackend::new(path, (1000, 760)).into_drawing_area();
+    let mut svg = String::from(crate::PLOT_MARK);
+    draw_run(&mut svg, r, base, fin, th, info)?;
+    crane_ident::atomic::write(path, svg)?;
+    Ok(())
+}
+
+fn draw_run(
+    svg: &mut String,
+    r: &Prepared,
+    base: &[f64],
+    fin: &[f64],
+    th: &Thresholds,
+    info: &DriveInfo,
+) -> Result<(), Dyn> {
+    let root = SVGBackend::with_string(svg, (1000, 760)).into_drawing_area();
     root.fill(&WHITE)?;
     let (top, bottom) = root.split_vertically(470);
     let t: Vec<f64> = (0..r.run.x.len()).map(|k| k as f64 * r.run.dt).collect();
@@ -196,8 +211,23 @@ fn friction_curve(p: &DriveParams, vmax: f64) -> (Curve, Curve) {
     (pos, neg)
 }
 
+/// Draws the force-velocity plot and writes it atomically to `path`.
 fn force_velocity(
     path: &Path,
+    held: &[&Prepared],
+    baseline: &Scored,
+    final_: &Scored,
+    th: &Thresholds,
+    info: &DriveInfo,
+) -> Result<(), Dyn> {
+    let mut svg = String::from(crate::PLOT_MARK);
+    draw_force_velocity(&mut svg, held, baseline, final_, th, info)?;
+    crane_ident::atomic::write(path, svg)?;
+    Ok(())
+}
+
+fn draw_force_velocity(
+    svg: &mut String,
     held: &[&Prepared],
     baseline: &Scored,
     final_: &Scored,
@@ -230,7 +260,7 @@ fn force_velocity(
             .chain(bp.iter().chain(&bn).chain(&fp).chain(&fneg).map(|q| q.1))
             .chain([p.breakaway_pos, -p.breakaway_neg]),
     );
-    let root = SVGBackend::new(path, (1000, 650)).into_drawing_area();
+    let root = SVGBackend::with_string(svg, (1000, 650)).into_drawing_area();
     root.fill(&WHITE)?;
     let mut chart = ChartBuilder::on(&root)
         .caption(

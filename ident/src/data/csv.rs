@@ -169,7 +169,7 @@ pub fn parse_table(file: &Path, text: &str) -> Result<Table, DataError> {
 
 /// Reads and parses a CSV file.
 pub fn read_table(file: &Path) -> Result<Table, DataError> {
-    let text = std::fs::read_to_string(file)
+    let text = crate::input::read_text(file)
         .map_err(|e| err(file, None, None, Problem::Io(e.to_string())))?;
     parse_table(file, &text)
 }

@@ -508,7 +508,7 @@ pub fn load_run(dir: &Path, ds: &DatasetSpec, spec: &RunSpec) -> Result<Run, Dat
 /// an error naming file, line and column.
 pub fn load_dataset(dir: &Path) -> Result<Dataset, DataError> {
     let spec_path = dir.join(DATASET_FILE);
-    let text = std::fs::read_to_string(&spec_path).map_err(|e| {
+    let text = crate::input::read_text(&spec_path).map_err(|e| {
         let why = if e.kind() == std::io::ErrorKind::NotFound && dir.is_dir() {
             // a folder of logs without a description: say what to write
             format!(

@@ -600,5 +600,92 @@ pub fn parse_spec(file: &Path, text: &str) -> Result<DatasetSpec, DataError> {
             return Err(bad("file", "runs.file must name a CSV file".into()));
         }
     }
+    check_columns(file, text, &spec)?;
+    check_runs_listed(file, text, &spec)?;
     Ok(spec)
+}
+
+/// The canonical column names a `[columns]` table may rename: the single-axis `t`, `x`, `u`,
+/// `force` and the crane's `u_x`, `u_y`, `u_l`, `y`, `l`, `alpha`, `beta`.
+pub const CANONICAL_COLUMNS: [&str; 11] = [
+    "t", "x", "u", "force", "u_x", "u_y", "u_l", "y", "l", "alpha", "beta",
+];
+
+/// Every key of a `[columns]` table (the data set's and each run's) must be a canonical name:
+/// `pos = "x"` would otherwise be ignored without a word.
+fn check_columns(file: &Path, text: &str, spec: &DatasetSpec) -> Result<(), DataError> {
+    let tables = std::iter::once(&spec.columns).chain(spec.runs.iter().map(|r| &r.columns));
+    for cols in tables {
+        if let Some(k) = cols
+            .keys()
+            .find(|k| !CANONICAL_COLUMNS.contains(&k.as_str()))
+        {
+            return Err(err(
+                file,
+                line_of_key(text, k),
+                None,
+                Problem::BadValue(format!(
+                    "[columns] key `{k}` is no canonical column name; the keys are the names the tool expects ({}) and the values the names in your files, e.g. `x = \"{k}\"`",
+                    CANONICAL_COLUMNS.join(", ")
+                )),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `runs = []` written out is refused (it would silently mean "every *.csv"), and so is one
+/// file listed twice (as a fitting and a held-out run, a held-out score would be computed on
+/// training data).
+fn check_runs_listed(file: &Path, text: &str, spec: &DatasetSpec) -> Result<(), DataError> {
+    let explicit_empty = text
+        .parse::<toml::Table>()
+        .ok()
+        .and_then(|t| {
+            t.get("runs")
+                .and_then(|r| r.as_array())
+                .map(|a| a.is_empty())
+        })
+        .unwrap_or(false);
+    if explicit_empty {
+        return Err(err(
+            file,
+            line_of_key(text, "runs"),
+            None,
+            Problem::BadValue(
+                "`runs = []` lists no run; list them as [[runs]] tables, or leave `runs` out to read every *.csv of the directory"
+                    .into(),
+            ),
+        ));
+    }
+    let dir = file.parent().unwrap_or(Path::new("."));
+    let key = |f: &str| {
+        let p = dir.join(f.trim());
+        p.canonicalize().unwrap_or(p)
+    };
+    for (i, a) in spec.runs.iter().enumerate() {
+        if let Some(b) = spec.runs[..i].iter().find(|b| key(&b.file) == key(&a.file)) {
+            // the line of the i-th `file = ...` key: this run's
+            let line = text
+                .lines()
+                .enumerate()
+                .filter(|(_, l)| {
+                    l.trim_start()
+                        .strip_prefix("file")
+                        .is_some_and(|r| r.trim_start().starts_with('='))
+                })
+                .nth(i)
+                .map(|(k, _)| k + 1);
+            return Err(err(
+                file,
+                line,
+                None,
+                Problem::BadValue(format!(
+                    "run `{}` is listed twice (kinds `{:?}` and `{:?}`): a run is either fitted or held out, and a held-out score on a fitting run is no held-out score",
+                    a.file, b.kind, a.kind
+                )),
+            ));
+        }
+    }
+    Ok(())
 }
