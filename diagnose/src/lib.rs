@@ -250,6 +250,13 @@ pub fn diagnose_dataset(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, 
         crane::diagnose_crane(ds, opts)
     } else if ds.runs.is_empty() {
         Err(DiagnoseError::Input("the data set has no run".into()))
+    } else if matches!(opts.baseline, Baseline::Params(_) | Baseline::Fit(Some(_))) {
+        // (the open-loop pipeline fits its own baseline: a crane file would be ignored)
+        Err(DiagnoseError::Input(
+            "--params is a crane parameter file; single-axis data get a baseline fitted from \
+             their own runs (leave --params out)"
+                .into(),
+        ))
     } else if opts.baseline == Baseline::Symmetric || closed_loop(ds) {
         axis::diagnose_axis(ds, opts)
     } else {

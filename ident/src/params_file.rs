@@ -48,6 +48,47 @@ pub enum ParamsError {
     },
 }
 
+/// Coefficients of a dry-friction polynomial (`c0 .. c4`).
+pub const DRY_COEFFICIENTS: usize = 5;
+
+/// Every `dry_pos` / `dry_neg` array must have exactly [`DRY_COEFFICIENTS`] entries (a longer
+/// one would otherwise be cut without a word).
+fn check_polynomial_lengths(path: &Path, text: &str) -> Result<(), ParamsError> {
+    let Ok(table) = text.parse::<toml::Table>() else {
+        return Ok(()); // the typed parse reports the syntax error with its place
+    };
+    for (axis, v) in &table {
+        let Some(t) = v.as_table() else { continue };
+        for key in ["dry_pos", "dry_neg"] {
+            if let Some(a) = t.get(key).and_then(|a| a.as_array()) {
+                if a.len() != DRY_COEFFICIENTS {
+                    let field = format!("{axis}.{key}");
+                    let line = text
+                        .lines()
+                        .position(|l| {
+                            l.trim_start()
+                                .strip_prefix(key)
+                                .is_some_and(|r| r.trim_start().starts_with('='))
+                        })
+                        .map_or(0, |i| i + 1);
+                    return Err(ParamsError::Syntax {
+                        path: path.to_path_buf(),
+                        line,
+                        column: 1,
+                        message: format!(
+                            "`{field}` has {} coefficients; a dry-friction polynomial has \
+                             exactly {DRY_COEFFICIENTS} (c0 + c1 p + ... + c4 p^4; write 0 for \
+                             the terms you do not use)",
+                            a.len()
+                        ),
+                    });
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 /// TOML text of `p` (the format `read` takes).
 pub fn to_toml(p: &Params) -> String {
     toml::to_string_pretty(p).unwrap_or_default()
@@ -55,6 +96,7 @@ pub fn to_toml(p: &Params) -> String {
 
 /// Parses parameter-file text; `path` names the file in errors.
 pub fn parse(path: &Path, text: &str) -> Result<Params, ParamsError> {
+    check_polynomial_lengths(path, text)?;
     let p: Params = toml::from_str(text).map_err(|e| {
         let (line, column) = e
             .span()
@@ -81,13 +123,52 @@ pub fn parse(path: &Path, text: &str) -> Result<Params, ParamsError> {
     Ok(p)
 }
 
-/// Reads and checks a parameter file.
+/// Reads and checks a parameter file; beyond [`parse`], every dry-friction polynomial must
+/// be >= 0 on its axis's travel ([`nonnegative_on_travel`]).
 pub fn read(path: &Path) -> Result<Params, ParamsError> {
     let text = crate::input::read_text(path).map_err(|source| ParamsError::Io {
         path: path.to_path_buf(),
         source,
     })?;
-    parse(path, &text)
+    let p = parse(path, &text)?;
+    nonnegative_on_travel(&p).map_err(|error| ParamsError::Invalid {
+        path: path.to_path_buf(),
+        line: line_of_field(text.as_str(), error.field),
+        error,
+    })?;
+    Ok(p)
+}
+
+/// Every dry-friction polynomial >= 0 at [`DRY_CHECK_POINTS`] + 1 points of its axis's
+/// travel `[min, max]`: below 0 the model clamps it to 0 without a word, so a file that asks
+/// for it is refused. (Not part of [`parse`]: a `Params` built in Python may hold any
+/// polynomial, and the model's clamp is its documented meaning there.)
+pub fn nonnegative_on_travel(p: &Params) -> Result<(), crane_model::Error> {
+    const NAMES: [[&str; 2]; 3] = [
+        ["x.dry_pos", "x.dry_neg"],
+        ["y.dry_pos", "y.dry_neg"],
+        ["rope.dry_pos", "rope.dry_neg"],
+    ];
+    for (a, n) in p.axes().into_iter().zip(NAMES) {
+        // a dry-friction polynomial below 0 somewhere on the travel: the model would clamp
+        // it to 0 there without a word
+        for (field, c) in [(n[0], &a.dry_pos), (n[1], &a.dry_neg)] {
+            let lowest = (0..=DRY_CHECK_POINTS)
+                .map(|k| {
+                    let p = a.min + (a.max - a.min) * k as f64 / DRY_CHECK_POINTS as f64;
+                    crane_model::friction::horner(c, p)
+                })
+                .fold(f64::INFINITY, f64::min);
+            if lowest < 0.0 {
+                return Err(crane_model::Error {
+                    field,
+                    problem: crane_model::Problem::LevelBelowZero,
+                    value: lowest,
+                });
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Writes a parameter file atomically (temporary file + rename).
@@ -99,6 +180,10 @@ pub fn write(path: &Path, p: &Params) -> std::io::Result<()> {
 /// friction [N s/m, N], swing damping [kg m^2/s] and limits [m]: far beyond any crane this
 /// model is for, far below what overflows its arithmetic.
 pub const MAX_MAGNITUDE: f64 = 1e6;
+/// Points (plus one) on each axis's travel `[min, max]` where the dry-friction polynomials
+/// must be >= 0.
+pub const DRY_CHECK_POINTS: usize = 200;
+
 /// Largest gravity accepted [m/s^2].
 pub const MAX_GRAVITY: f64 = 100.0;
 
@@ -259,5 +344,44 @@ mod tests {
         let msg = parse(Path::new("p.toml"), &huge).unwrap_err().to_string();
         assert!(msg.len() < 1000, "echoed {} bytes", msg.len());
         assert!(msg.contains("nonsense"), "{msg}");
+    }
+
+    #[test]
+    fn polynomials_of_the_wrong_length_or_negative_on_the_travel_are_refused() {
+        let p = Params::default();
+        let text = to_toml(&p);
+        let x0 = format!("{:?}", p.x.dry_pos[0]);
+        // 100 coefficients: refused, not cut to 5
+        let long = format!("[{}]", vec!["0.5"; 100].join(", "));
+        let start = text.find("dry_pos = [").unwrap();
+        let end = start + text[start..].find(']').unwrap() + 1;
+        let bad = format!("{}dry_pos = {long}{}", &text[..start], &text[end..]);
+        let msg = parse(Path::new("p.toml"), &bad).unwrap_err().to_string();
+        assert!(
+            msg.contains("x.dry_pos") && msg.contains("100 coefficients"),
+            "{msg}"
+        );
+        // a polynomial below 0 on the travel: refused, not clamped
+        let neg = format!(
+            "{}dry_pos = [-1.0, 0.0, 0.0, 0.0, 0.0]{}",
+            &text[..start],
+            &text[end..]
+        );
+        assert!(
+            parse(Path::new("p.toml"), &neg).is_ok(),
+            "parse keeps the model's clamp"
+        );
+        let dir = std::env::temp_dir().join(format!("crane-params-neg-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let f = dir.join("p.toml");
+        std::fs::write(&f, &neg).unwrap();
+        let msg = read(&f).unwrap_err().to_string();
+        assert!(
+            msg.contains("x.dry_pos") && msg.contains("negative"),
+            "{msg} ({x0})"
+        );
+        std::fs::write(&f, &text).unwrap();
+        assert_eq!(read(&f).unwrap(), p);
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

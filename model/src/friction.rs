@@ -14,7 +14,7 @@ use crate::real::Real;
 
 /// `c0 + c1 p + c2 p^2 + c3 p^3 + c4 p^4` by Horner, not clamped.
 #[inline]
-fn horner<R: Real>(c: &[R; 5], p: R) -> R {
+pub fn horner<R: Real>(c: &[R; 5], p: R) -> R {
     let [c0, c1, c2, c3, c4] = *c;
     let acc = c4;
     let acc = acc * p + c3;
