@@ -25,10 +25,22 @@ fn spinner(msg: &str) -> ProgressBar {
     pb
 }
 
+/// When the virtual rig may replace an existing, non-empty output folder.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Replace {
+    /// Never (`crane rig` without `--force`).
+    Never,
+    /// When every entry in it is one the new campaign writes too (`crane demo` over its own
+    /// earlier data set): a file the user added there is never deleted.
+    OnlyOurs,
+    /// Always (`--force`).
+    Always,
+}
+
 /// Runs the virtual rig into `out` atomically: the data set is written into a temporary
 /// directory beside `out` and renamed into place, so `out` holds the old data set or the new
-/// one, never a mix. An existing, non-empty `out` is refused unless `replace`.
-fn rig_into(out: &Path, opts: &RigOptions, replace: bool) -> Result<RigSummary> {
+/// one, never a mix. An existing, non-empty `out` is replaced as `replace` says.
+fn rig_into(out: &Path, opts: &RigOptions, replace: Replace) -> Result<RigSummary> {
     if out.exists() {
         if !out.is_dir() {
             bail!("{} exists and is not a directory", out.display());
@@ -37,7 +49,7 @@ fn rig_into(out: &Path, opts: &RigOptions, replace: bool) -> Result<RigSummary> 
             .with_context(|| format!("read {}", out.display()))?
             .next()
             .is_none();
-        if !empty && !replace {
+        if !empty && replace == Replace::Never {
             if is_dataset(out) {
                 return Err(OutputError::ReplacesDataset {
                     out: out.to_path_buf(),
@@ -60,6 +72,22 @@ fn rig_into(out: &Path, opts: &RigOptions, replace: bool) -> Result<RigSummary> 
             return Err(e).with_context(|| format!("rig into {}", out.display()));
         }
     };
+    if replace == Replace::OnlyOurs && out.is_dir() {
+        let foreign = std::fs::read_dir(out)
+            .with_context(|| format!("read {}", out.display()))?
+            .flatten()
+            .map(|e| e.file_name())
+            .find(|name| !tmp.join(name).exists());
+        if let Some(name) = foreign {
+            let _ = std::fs::remove_dir_all(&tmp);
+            bail!(
+                "{} holds {}, which the demo did not write; refusing to replace the folder \
+                 (move it away, or pass --force)",
+                out.display(),
+                name.to_string_lossy()
+            );
+        }
+    }
     let old = crane_ident::atomic::temp_beside(out);
     let had_old = out.exists();
     if had_old {
@@ -82,12 +110,22 @@ fn rig_into(out: &Path, opts: &RigOptions, replace: bool) -> Result<RigSummary> 
 /// `crane rig`: the virtual rig's campaign into `out` (refused over an existing, non-empty
 /// directory unless `force`).
 pub fn rig(out: &Path, seed: Option<u64>, force: bool, json: bool) -> Result<RigSummary> {
+    let replace = if force {
+        Replace::Always
+    } else {
+        Replace::Never
+    };
+    rig_with(out, seed, replace, json)
+}
+
+/// `crane rig` with a replacement policy (see [`Replace`]).
+fn rig_with(out: &Path, seed: Option<u64>, replace: Replace, json: bool) -> Result<RigSummary> {
     let mut opts = RigOptions::default();
     if let Some(s) = seed {
         opts.plant.seed = s;
     }
     let pb = spinner("virtual rig: running the paper's experiments");
-    let summary = rig_into(out, &opts, force)?;
+    let summary = rig_into(out, &opts, replace)?;
     pb.finish_and_clear();
     if !json {
         out!(
@@ -299,8 +337,14 @@ pub fn demo(out: &Path, force: bool, json: bool) -> Result<DemoReport> {
     let dataset = out.join("dataset");
     let params = out.join("params.toml");
     let plots = out.join("plots");
-    let ours = dataset.join(TRUTH_FILE).is_file();
-    let rig = rig(&dataset, None, force || ours, json)?;
+    let replace = if force {
+        Replace::Always
+    } else if dataset.join(TRUTH_FILE).is_file() {
+        Replace::OnlyOurs
+    } else {
+        Replace::Never
+    };
+    let rig = rig_with(&dataset, None, replace, json)?;
     let identify = identify(&dataset, &params, &plots, force, json)?;
     let validate = validate(&dataset, &params, &plots, force, json)?;
     Ok(DemoReport {

@@ -199,6 +199,13 @@ fn demo_then_validate_and_the_data_set_repros() {
     assert!(String::from_utf8_lossy(&o.stdout).contains("NMAE"));
     let o = crane(&d, &["demo"]);
     assert!(o.status.success(), "second demo: {}", stderr(&o));
+    // a run the user added to the demo's data set: a third demo refuses, and keeps it
+    std::fs::write(d.join("out/dataset/my_run.csv"), "t,x\n").unwrap();
+    let o = crane(&d, &["demo"]);
+    assert!(!o.status.success(), "a demo deleted a user's run");
+    assert!(stderr(&o).contains("my_run.csv"), "{}", stderr(&o));
+    assert!(d.join("out/dataset/my_run.csv").is_file());
+    std::fs::remove_file(d.join("out/dataset/my_run.csv")).unwrap();
 
     let mut child = Command::new(env!("CARGO_BIN_EXE_crane"))
         .current_dir(&d)
