@@ -181,6 +181,9 @@ enum Command {
         /// Seed.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Run even when the estimated wall time exceeds an hour.
+        #[arg(long)]
+        yes: bool,
         /// Print machine-readable results (JSON).
         #[arg(long)]
         json: bool,
@@ -282,9 +285,10 @@ fn run(command: Command) -> Result<()> {
             duration,
             h,
             seed,
+            yes,
             json,
         } => {
-            let s = study_cmd::mc(sims, duration, h, seed, json)?;
+            let s = study_cmd::mc(sims, duration, h, seed, yes, json)?;
             if json {
                 emit(&s)?;
             }

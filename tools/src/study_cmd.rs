@@ -61,14 +61,38 @@ pub fn study(out: &Path, json: bool, quick: bool, budget: f64, force: bool) -> R
 /// Most model steps one simulation of `crane mc` may take.
 pub const MAX_STEPS: f64 = 1e8;
 
+/// Longest estimated wall time `crane mc` starts without `--yes` [s].
+pub const MAX_WALL_S: f64 = 3600.0;
+
+/// Simulated time of the pilot simulation that prices a Monte Carlo run [s].
+pub const PILOT_S: f64 = 2.0;
+
+/// Estimated wall time of `sims` simulations of `duration` s [s]: one pilot simulation of up
+/// to [`PILOT_S`] s timed, scaled to the duration, times the simulations per thread.
+fn estimate_wall_s(
+    sims: usize,
+    duration: f64,
+    stepper: montecarlo::Stepper,
+    seed: u64,
+) -> Result<f64> {
+    let pilot = duration.min(PILOT_S);
+    let t0 = std::time::Instant::now();
+    montecarlo::run_with_progress(1, pilot, stepper, seed, || {})?;
+    let per_sim = t0.elapsed().as_secs_f64() * duration / pilot;
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    Ok(per_sim * sims.div_ceil(threads) as f64)
+}
+
 /// `crane mc`: a Monte Carlo batch on all cores.
 /// Fixed step `h` if given (at most [`MAX_STEPS`] per simulation), else the adaptive
 /// integrator at the study's default tolerance ([`study::DEFAULT_RTOL`]).
+/// Refused without `yes` when the estimated wall time exceeds [`MAX_WALL_S`].
 pub fn mc(
     sims: u64,
     duration: f64,
     h: Option<f64>,
     seed: u64,
+    yes: bool,
     json: bool,
 ) -> Result<montecarlo::Summary> {
     let stepper = match h {
@@ -85,6 +109,16 @@ pub fn mc(
         None => montecarlo::Stepper::Adaptive(study::DEFAULT_RTOL),
     };
     let sims = usize::try_from(sims)?;
+    if !yes {
+        let est = estimate_wall_s(sims, duration, stepper, seed)?;
+        if est > MAX_WALL_S {
+            bail!(
+                "{sims} simulations of {duration} s would take about {:.1} h on this machine \
+                 (a pilot simulation measured); pass --yes to run them anyway, or ask for fewer",
+                est / 3600.0
+            );
+        }
+    }
     // progress on stderr; indicatif draws nothing when stderr is not a terminal
     let pb = indicatif::ProgressBar::new(sims as u64);
     pb.set_style(

@@ -106,6 +106,20 @@ fn implausible_options_are_refused() {
         "{}",
         stderr(&o)
     );
+    // about 12 days of work: priced by a pilot simulation and refused without --yes, at once
+    let t0 = Instant::now();
+    let o = crane(&d, &["mc", "--sims", "10000000", "--duration", "3600"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--yes") && stderr(&o).contains(" h "),
+        "{}",
+        stderr(&o)
+    );
+    assert!(
+        t0.elapsed() < Duration::from_secs(60),
+        "the refusal took {:?}",
+        t0.elapsed()
+    );
 }
 
 #[test]
