@@ -743,3 +743,37 @@ fn a_run_file_that_is_a_fifo_is_refused_instead_of_waiting_forever() {
     }
     std::fs::remove_dir_all(d).unwrap();
 }
+
+#[test]
+fn time_in_another_unit_than_declared_is_refused_naming_time_unit() {
+    // 1 kHz stamps in milliseconds read as seconds: 1 Hz
+    let ms: String = axis_csv(200, 0.001)
+        .lines()
+        .enumerate()
+        .map(|(k, l)| {
+            if k == 0 {
+                format!("{l}\n")
+            } else {
+                let (t, rest) = l.split_once(',').unwrap();
+                format!("{},{rest}\n", t.parse::<f64>().unwrap() * 1e3)
+            }
+        })
+        .collect();
+    let (d, e) = fails("", &ms);
+    let m = e.to_string();
+    assert!(m.contains("time_unit") && m.contains("Hz"), "{m}");
+    std::fs::remove_dir_all(d).unwrap();
+    // the same stamps declared as milliseconds: fine
+    assert_eq!(
+        ok("time_unit = \"ms\"\n", &ms).runs[0]
+            .axis()
+            .unwrap()
+            .t
+            .len(),
+        200
+    );
+    // seconds declared as milliseconds (1 kHz becomes 1 MHz): refused
+    let (d, e) = fails("time_unit = \"ms\"\n", &axis_csv(200, 0.001));
+    assert!(e.to_string().contains("time_unit"), "{e}");
+    std::fs::remove_dir_all(d).unwrap();
+}

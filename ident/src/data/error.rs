@@ -191,6 +191,14 @@ pub enum Timing {
         /// The run's median step [s].
         median_step_s: f64,
     },
+    /// A median sample rate outside [`crate::data::timebase::RATE_RANGE_HZ`]: almost surely
+    /// stamps in another unit than `time_unit` says (milliseconds or sample indices read as
+    /// seconds, or the reverse).
+    #[error("the median time step is {median_step_s} s, a sample rate of {:.4e} Hz, outside ({}, {}) Hz: is `time_unit` in dataset.toml right (\"s\", \"ms\", \"us\")? time stamps in milliseconds or sample indices read as seconds give 1 Hz or less", 1.0 / median_step_s, crate::data::timebase::RATE_RANGE_HZ.0, crate::data::timebase::RATE_RANGE_HZ.1)]
+    Rate {
+        /// The run's median step [s].
+        median_step_s: f64,
+    },
     /// Irregular stamps in a crane run, which must be uniformly sampled.
     #[error("irregular time stamps: the step ending here is {step_s} s, the median step {median_step_s} s ({irregular_steps} steps deviate more than {:.0} %); crane runs must be uniformly sampled (rows dropped or an asynchronous log?)", crate::data::timebase::JITTER_TOLERANCE * 100.0)]
     IrregularCrane {

@@ -27,6 +27,11 @@ pub const JITTER_TOLERANCE: f64 = 0.05;
 /// were lost and the run is refused.
 pub const MAX_GAP_STEPS: f64 = 4.0;
 
+/// Plausible median sample rates of a log [Hz], both ends excluded: at 1 Hz or below no drive's friction or inertia
+/// shows (and stamps in milliseconds or sample indices read as seconds land there); above
+/// 1 MHz no position encoder is read (seconds declared as milliseconds at 1 kHz land there).
+pub const RATE_RANGE_HZ: (f64, f64) = (1.0, 1e6);
+
 /// A channel must change at least this often before it can be called held.
 pub const HELD_MIN_CHANGES: usize = 20;
 
@@ -151,6 +156,10 @@ pub fn check_time(t: &[f64], lines: &[usize]) -> Result<TimeBase, (usize, Proble
     }
     let steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
     let h = median(&steps);
+    let rate = 1.0 / h;
+    if !(rate > RATE_RANGE_HZ.0 && rate < RATE_RANGE_HZ.1) {
+        return Err((1, Problem::Timing(Timing::Rate { median_step_s: h })));
+    }
     let mut worst = 0usize;
     let mut worst_dev = 0.0;
     let mut irregular = 0usize;
