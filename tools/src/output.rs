@@ -96,7 +96,20 @@ impl Outputs {
 
     /// Refuses `out` if it is an input, or an existing file (or `dataset.toml`) of a data set
     /// directory; `--force` lifts both.
+    /// Also refuses, `--force` or not, a destination that is not a regular file, a device,
+    /// a FIFO or a missing path (a symbolic link, a directory: [`crane_ident::atomic`]).
     pub fn check(&self, out: &Path) -> Result<(), OutputError> {
+        self.policy(out)?;
+        crane_ident::atomic::destination(out)
+            .map(|_| ())
+            .map_err(|source| OutputError::Io {
+                path: out.to_path_buf(),
+                source,
+            })
+    }
+
+    /// The input and data set rules of [`Outputs::check`].
+    fn policy(&self, out: &Path) -> Result<(), OutputError> {
         if self.force {
             return Ok(());
         }
@@ -119,6 +132,19 @@ impl Outputs {
             return Err(OutputError::ReplacesDataset {
                 out: out.to_path_buf(),
                 dataset: n,
+            });
+        }
+        Ok(())
+    }
+
+    /// Refuses an output folder `dir` that exists and is not a directory, before any work
+    /// (and [`Outputs::check`]s it).
+    pub fn check_dir(&self, dir: &Path) -> Result<(), OutputError> {
+        self.policy(dir)?;
+        if dir.exists() && !dir.is_dir() {
+            return Err(OutputError::Clash {
+                out: dir.to_path_buf(),
+                why: "exists and is not a directory: an output folder is needed here",
             });
         }
         Ok(())

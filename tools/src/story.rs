@@ -154,12 +154,22 @@ fn est(e: &Estimate) -> String {
 }
 
 /// The true parameters the virtual rig left next to its data set, if any.
+///
+/// Loaders ignore this file (`DATA_FORMAT.md`): one that does not read as the rig's
+/// parameters (a user's own file of that name) is skipped with a warning on stderr, never an
+/// error.
 fn rig_truth(dataset: &Path) -> Result<Option<crane_model::Params>> {
     let path = dataset.join(crane_ident::campaign::TRUTH_FILE);
     if !path.exists() {
         return Ok(None);
     }
-    Ok(Some(params_file::read(&path)?))
+    match params_file::read(&path) {
+        Ok(p) => Ok(Some(p)),
+        Err(e) => {
+            eprintln!("crane: warning: {e}; not the virtual rig's truth, so the plots show none");
+            Ok(None)
+        }
+    }
 }
 
 /// `crane identify`: every parameter from a data set, written to `out` (TOML); friction
@@ -176,13 +186,15 @@ pub fn identify(
         .input(&dataset.join(TRUTH_FILE));
     // refuse before the work, not after it
     outputs.check(out)?;
+    outputs.check_dir(plots)?;
     let pb = spinner("identifying");
     let id = crane_ident::identify::identify(dataset)
         .with_context(|| format!("identify from {}", dataset.display()))?;
     pb.finish_and_clear();
-    outputs.write(out, params_file::to_toml(&id.params))?;
     let truth = rig_truth(dataset)?;
+    // the plots first: a failure there leaves the earlier parameter file as it was
     let files = crate::plot::friction(&id, truth.as_ref(), plots, &outputs)?;
+    outputs.write(out, params_file::to_toml(&id.params))?;
     if json {
         return Ok(id);
     }
@@ -241,6 +253,7 @@ pub fn validate(
     json: bool,
 ) -> Result<ValidationReport> {
     let outputs = Outputs::new(force).input(params);
+    outputs.check_dir(plots)?;
     let p = params_file::read(params).context("read parameters")?;
     let ds = crane_ident::data::load_dataset(dataset)
         .with_context(|| format!("load data set {}", dataset.display()))?;

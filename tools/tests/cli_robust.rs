@@ -220,6 +220,34 @@ fn demo_then_validate_and_the_data_set_repros() {
     assert!(stderr(&o).contains("my_run.csv"), "{}", stderr(&o));
     assert!(d.join("out/dataset/my_run.csv").is_file());
     std::fs::remove_file(d.join("out/dataset/my_run.csv")).unwrap();
+    // a failed command leaves the earlier outputs as they were: --plots naming a file is
+    // refused before the work, and params.toml is not replaced
+    let before = std::fs::read(d.join("out/params.toml")).unwrap();
+    std::fs::write(d.join("F"), "a file").unwrap();
+    let o = crane(&d, &["identify", "out/dataset", "--plots", "F"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("not a directory"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(d.join("out/params.toml")).unwrap(), before);
+    // simulate with its plot's path a directory: refused before the CSV is written
+    std::fs::create_dir_all(d.join("s/sim.svg")).unwrap();
+    let o = crane(&d, &["simulate", "--out", "s/sim.csv"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("directory"), "{}", stderr(&o));
+    assert!(
+        !d.join("s/sim.csv").exists(),
+        "the CSV was written before the refusal"
+    );
+    // a user's own truth_params.toml in a data set is ignored with a warning (DATA_FORMAT.md)
+    let truth = d.join("out/dataset/truth_params.toml");
+    let kept = std::fs::read(&truth).unwrap();
+    std::fs::write(&truth, "my notes: not parameters\n").unwrap();
+    let o = crane(
+        &d,
+        &["identify", "out/dataset", "--out", "u.toml", "--plots", "u"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("warning"), "{}", stderr(&o));
+    std::fs::write(&truth, kept).unwrap();
 
     let mut child = Command::new(env!("CARGO_BIN_EXE_crane"))
         .current_dir(&d)
