@@ -89,7 +89,7 @@ u = "vir"
     write(
         &d,
         "axis.csv",
-        "t,qm,vir,pulses\n0,0.1,0.5,0\n0.001,0.2,-0.5,5\n",
+        "t,qm,vir,pulses\n0,0.1,0.5,0\n0.001,0.1002,-0.5,5\n",
     );
     let ds = load_dataset(&d).unwrap();
     assert_eq!(ds.runs[0].kind, RunKind::RopeLoaded);
@@ -100,7 +100,7 @@ u = "vir"
     match &ds.runs[1].samples {
         Samples::Axis(a) => {
             assert_eq!(a.force, vec![5.0, -5.0]);
-            assert_eq!(a.x, vec![0.1, 0.2]);
+            assert_eq!(a.x, vec![0.1, 0.1002]);
         }
         _ => panic!("axis run expected"),
     }

@@ -777,3 +777,20 @@ fn time_in_another_unit_than_declared_is_refused_naming_time_unit() {
     assert!(e.to_string().contains("time_unit"), "{e}");
     std::fs::remove_dir_all(d).unwrap();
 }
+
+#[test]
+fn millimetres_declared_as_metres_are_refused_naming_position_scale() {
+    // a 0.3 m/s axis logged in millimetres: 300 "m/s"
+    let mut mm = String::from("t,x,u\n");
+    for k in 0..400 {
+        let t = k as f64 * 0.001;
+        let _ = writeln!(mm, "{t},{},{}", 300.0 * t, 1.0);
+    }
+    let (d, e) = fails("", &mm);
+    let m = e.to_string();
+    assert!(m.contains("position_scale") && m.contains("m/s"), "{m}");
+    std::fs::remove_dir_all(d).unwrap();
+    let ds = ok("position_scale = 0.001\n", &mm);
+    let x = &ds.runs[0].axis().unwrap().x;
+    assert!((x[399] - 0.3 * 0.399).abs() < 1e-12);
+}

@@ -295,6 +295,44 @@ pub fn crane_run(table: &Table, renames: &BTreeMap<String, String>) -> Result<Cr
     })
 }
 
+/// The 99th percentile of a run's sample-to-sample speed must be within the unit's
+/// [`PositionUnit::max_speed`]: beyond it the positions are almost surely in another unit than
+/// declared (millimetres read as metres), and every fitted inertia and friction would be off
+/// by that factor without a word. (The percentile, not the maximum: an encoder glitch moves
+/// two differences.)
+fn check_speed(table: &Table, t: &[f64], x: &[f64], unit: PositionUnit) -> Result<(), DataError> {
+    let mut v: Vec<f64> = t
+        .windows(2)
+        .zip(x.windows(2))
+        .map(|(t, x)| ((x[1] - x[0]) / (t[1] - t[0])).abs())
+        .filter(|v| v.is_finite())
+        .collect();
+    if v.is_empty() {
+        return Ok(());
+    }
+    let k = ((v.len() - 1) as f64 * 0.99) as usize;
+    let (_, p99, _) = v.select_nth_unstable_by(k, f64::total_cmp);
+    let limit = unit.max_speed();
+    if *p99 > limit {
+        return Err(err(
+            &table.file,
+            None,
+            None,
+            Problem::BadValue(format!(
+                "the positions move at {:.3e} {}/s (99th percentile of the sample-to-sample \
+                 speed), beyond a plausible {limit:e} {}/s: are they in another unit than \
+                 position_unit = \"{}\"? for millimetres or milliradians set \
+                 position_scale = 0.001 in dataset.toml",
+                *p99,
+                unit.symbol(),
+                unit.symbol(),
+                unit.symbol()
+            )),
+        ));
+    }
+    Ok(())
+}
+
 /// Reads a single-axis run: `t`, `x` and either `force` (an effort: N or N m, gain 1) or `u`
 /// in `ds.input_unit` with the run's gain; with a declared controller, its reference and
 /// added-input columns. Irregular time stamps are resampled (zero-order hold) or refused,
@@ -310,6 +348,7 @@ pub fn axis_run(
     let (plo, phi) = position_unit.range();
     let xr = Some((plo, phi, position_unit.symbol()));
     let x = table.take("x", renames, xr)?;
+    check_speed(table, &t, &x, position_unit)?;
     let (u_name, input_unit, gain) = if table.find("force", renames).is_some() {
         let effort = position_unit.effort_unit();
         if let Some(iu) = ds.input_unit.filter(|iu| *iu != effort) {

@@ -39,6 +39,15 @@ impl PositionUnit {
         }
     }
 
+    /// Plausible peak speed [m/s or rad/s]: 20 m/s (beyond the fastest linear motors and
+    /// belt drives), 1e4 rad/s (95 000 rpm).
+    pub fn max_speed(self) -> f64 {
+        match self {
+            PositionUnit::Metre => 20.0,
+            PositionUnit::Radian => 1e4,
+        }
+    }
+
     /// `true` for metre (the default, not written out).
     pub fn is_metre(&self) -> bool {
         *self == PositionUnit::Metre
