@@ -7,7 +7,7 @@ use crane_ident::campaign::{run_rig, RigOptions, RigSummary};
 use crane_ident::identify::{Estimate, Identified};
 use crane_ident::params_file;
 use crane_ident::validate::ValidationReport;
-use crane_tools::output::{create_parent, is_dataset, OutputError, Outputs};
+use crane_tools::output::{create_parent, is_dataset, normalise, OutputError, Outputs};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -23,6 +23,57 @@ fn spinner(msg: &str) -> ProgressBar {
     pb.set_message(msg.to_string());
     pb.enable_steady_tick(Duration::from_millis(120));
     pb
+}
+
+/// A scratch folder removed when dropped (an error, a panic unwinding) and on Ctrl-C, unless
+/// [`Scratch::disarm`]ed after it was renamed into place.
+struct Scratch {
+    path: PathBuf,
+    armed: bool,
+}
+
+/// Scratch folders to remove if the process is interrupted (SIGINT, SIGTERM).
+static SCRATCH: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+impl Scratch {
+    fn new(path: PathBuf) -> Scratch {
+        static HANDLER: std::sync::Once = std::sync::Once::new();
+        HANDLER.call_once(|| {
+            // (if a handler cannot be set, Ctrl-C just ends the process as before)
+            let _ = ctrlc::set_handler(|| {
+                if let Ok(list) = SCRATCH.lock() {
+                    for p in list.iter() {
+                        let _ = std::fs::remove_dir_all(p);
+                    }
+                }
+                std::process::exit(130);
+            });
+        });
+        if let Ok(mut list) = SCRATCH.lock() {
+            list.push(path.clone());
+        }
+        Scratch { path, armed: true }
+    }
+
+    fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Keeps the folder (it is the output now).
+    fn disarm(mut self) {
+        self.armed = false;
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        if let Ok(mut list) = SCRATCH.lock() {
+            list.retain(|p| p != &self.path);
+        }
+        if self.armed {
+            let _ = std::fs::remove_dir_all(&self.path);
+        }
+    }
 }
 
 /// When the virtual rig may replace an existing, non-empty output folder.
@@ -63,23 +114,30 @@ fn rig_into(out: &Path, opts: &RigOptions, replace: Replace) -> Result<RigSummar
             );
         }
     }
-    create_parent(out)?;
-    let tmp = crane_ident::atomic::temp_beside(out);
-    let mut summary = match run_rig(&tmp, opts) {
-        Ok(s) => s,
-        Err(e) => {
-            let _ = std::fs::remove_dir_all(&tmp);
-            return Err(e).with_context(|| format!("rig into {}", out.display()));
+    // the folder is replaced by a rename: the current directory (`--out .`) or one holding
+    // it cannot be, and would leave the whole campaign behind in a hidden folder
+    if let Ok(cwd) = std::env::current_dir().and_then(|c| c.canonicalize()) {
+        if out.exists() && cwd.starts_with(normalise(out)) {
+            bail!(
+                "{} is the current directory or holds it; the data set replaces its folder \
+                 whole, so choose a folder below it (for example --out {})",
+                out.display(),
+                out.join("dataset").display()
+            );
         }
-    };
+    }
+    create_parent(out)?;
+    // removed on every way out but the last rename, Ctrl-C included
+    let tmp = Scratch::new(crane_ident::atomic::temp_beside(out));
+    let mut summary =
+        run_rig(tmp.path(), opts).with_context(|| format!("rig into {}", out.display()))?;
     if replace == Replace::OnlyOurs && out.is_dir() {
         let foreign = std::fs::read_dir(out)
             .with_context(|| format!("read {}", out.display()))?
             .flatten()
             .map(|e| e.file_name())
-            .find(|name| !tmp.join(name).exists());
+            .find(|name| !tmp.path().join(name).exists());
         if let Some(name) = foreign {
-            let _ = std::fs::remove_dir_all(&tmp);
             bail!(
                 "{} holds {}, which the demo did not write; refusing to replace the folder \
                  (move it away, or pass --force)",
@@ -88,21 +146,19 @@ fn rig_into(out: &Path, opts: &RigOptions, replace: Replace) -> Result<RigSummar
             );
         }
     }
-    let old = crane_ident::atomic::temp_beside(out);
+    let old = Scratch::new(crane_ident::atomic::temp_beside(out));
     let had_old = out.exists();
     if had_old {
-        std::fs::rename(out, &old).with_context(|| format!("move {} aside", out.display()))?;
+        std::fs::rename(out, old.path())
+            .with_context(|| format!("move {} aside", out.display()))?;
     }
-    if let Err(e) = std::fs::rename(&tmp, out) {
+    if let Err(e) = std::fs::rename(tmp.path(), out) {
         if had_old {
-            let _ = std::fs::rename(&old, out);
+            let _ = std::fs::rename(old.path(), out);
         }
-        let _ = std::fs::remove_dir_all(&tmp);
         return Err(e).with_context(|| format!("rename the new data set to {}", out.display()));
     }
-    if had_old {
-        std::fs::remove_dir_all(&old).with_context(|| format!("remove {}", old.display()))?;
-    }
+    tmp.disarm();
     summary.dir = out.to_path_buf();
     Ok(summary)
 }

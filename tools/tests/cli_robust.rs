@@ -431,3 +431,40 @@ fn diagnose_outputs_leave_devices_links_and_user_files_alone() {
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Issue 22: the virtual rig leaves nothing behind when refused (`--out .`) or interrupted
+/// (Ctrl-C while it runs: its scratch folder is removed).
+#[cfg(unix)]
+#[test]
+fn rig_leaves_no_scratch_folder_when_refused_or_interrupted() {
+    let d = tmp("scratch");
+    let o = crane(&d, &["rig", "--force", "--out", "."]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("current directory"), "{}", stderr(&o));
+    assert_eq!(std::fs::read_dir(&d).unwrap().count(), 0);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_crane"))
+        .current_dir(&d)
+        .args(["rig", "--out", "ds"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn");
+    // wait until the scratch folder exists, then interrupt
+    let t0 = Instant::now();
+    while std::fs::read_dir(&d).unwrap().count() == 0 && t0.elapsed() < Duration::from_secs(20) {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let _ = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status();
+    let status = child.wait().expect("wait");
+    if status.success() {
+        // (the campaign finished before the signal: then it is in place, not hidden)
+        assert!(d.join("ds").is_dir());
+    } else {
+        assert_eq!(status.code(), Some(130), "{status:?}");
+        let left: Vec<_> = std::fs::read_dir(&d).unwrap().flatten().collect();
+        assert!(left.is_empty(), "left behind: {:?}", left[0].path());
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
