@@ -172,12 +172,21 @@ pub enum Baseline {
     Symmetric,
 }
 
-/// The first line of every plot `crane diagnose` writes: a later run may replace a file that
-/// starts with it, and nothing else without `--force` ([`foreign_plot`]).
-pub const PLOT_MARK: &str = "<!-- written by crane diagnose -->\n";
+/// A comment right after the opening `<svg ...>` tag of every plot `crane diagnose` writes
+/// ([`mark_plot`]): a later run may replace a file that carries it, and nothing else without
+/// `--force` ([`foreign_plot`]).
+pub const PLOT_MARK: &str = "<!-- written by crane diagnose -->";
 
-/// The first `.svg` file in `dir` that `crane diagnose` did not write (it does not start with
-/// [`PLOT_MARK`]): a user's own figure, which a run with `--plots dir` must not replace
+/// `svg` with [`PLOT_MARK`] after its opening tag (the file still starts with `<svg`).
+pub fn mark_plot(svg: &str) -> String {
+    match svg.find('>') {
+        Some(i) => format!("{}{PLOT_MARK}{}", &svg[..=i], &svg[i + 1..]),
+        None => svg.to_string(),
+    }
+}
+
+/// The first `.svg` file in `dir` that `crane diagnose` did not write (no [`PLOT_MARK`] in its
+/// first kilobyte): a user's own figure, which a run with `--plots dir` must not replace
 /// without `--force`. `None` when the folder is missing or holds only the tool's plots.
 pub fn foreign_plot(dir: &std::path::Path) -> Option<PathBuf> {
     use std::io::Read;
@@ -189,11 +198,11 @@ pub fn foreign_plot(dir: &std::path::Path) -> Option<PathBuf> {
         .collect();
     names.sort();
     names.into_iter().find(|p| {
-        let mut head = vec![0u8; PLOT_MARK.len()];
+        let mut head = Vec::new();
         let ours = std::fs::File::open(p)
-            .and_then(|mut f| f.read_exact(&mut head))
+            .and_then(|f| f.take(1024).read_to_end(&mut head))
             .is_ok()
-            && head == PLOT_MARK.as_bytes();
+            && String::from_utf8_lossy(&head).contains(PLOT_MARK);
         !ours
     })
 }

@@ -83,7 +83,7 @@ pub fn crane_plots(dir: &Path, series: &[Series]) -> Result<(), DiagnoseError> {
         for (tag, x) in [("time", &s.t), ("position", &s.q), ("velocity", &s.v)] {
             let svg = scatter(x, &ys, &format!("{} residual vs {tag}", s.name));
             let path = dir.join(format!("{}_vs_{tag}.svg", s.name));
-            crane_ident::atomic::write(&path, format!("{}{svg}", crate::PLOT_MARK))
+            crane_ident::atomic::write(&path, crate::mark_plot(&svg))
                 .map_err(|e| DiagnoseError::Io(format!("{}: {e}", path.display())))?;
         }
     }

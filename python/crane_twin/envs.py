@@ -16,6 +16,12 @@ the environment's seeded generator (domain randomisation).
   + w_energy |u|^2 / 12^2)`` with ``p`` the payload's horizontal position.
 - Episodes have a fixed length (``episode_steps`` periods, default 500 = 5 s): never
   terminated, truncated at the end.
+- ``render_mode``: ``"rgb_array"`` (``render()`` returns a (300, 600, 3) uint8 image: top view
+  and side view, numpy only, no display) or ``"human"`` (the same frames in a matplotlib
+  window, at ``metadata["render_fps"]``).
+- ``reset(options=...)``: ``{"target": (x*, y*)}`` sets the episode's target [m] (within
+  ``Task.start_x`` / ``start_y``); the episode's random draws are made all the same, so the
+  rest of a seeded episode does not change. Any other key is an error.
 
 A step the model rejects (a non-finite action: ``crane_twin.InputError``; a state leaving the
 model's domain: ``crane_twin.StepError``) raises instead of returning a made-up observation.
@@ -38,6 +44,7 @@ from gymnasium.utils import seeding
 from gymnasium.vector.utils import batch_space
 
 from ._native import U_MAX, CraneBatch, Params
+from . import render as _render
 
 ENV_ID = "CraneAntiSway-v0"
 
@@ -81,6 +88,14 @@ class Task:
             lo, hi = getattr(self, name)
             if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
                 raise ValueError(f"Task.{name} must be a finite (low, high) range (got {(lo, hi)!r})")
+        if self.stiction_ratio[0] < 1.0:
+            raise ValueError(
+                f"Task.stiction_ratio is breakaway / sliding friction and must be >= 1 "
+                f"(got {self.stiction_ratio!r})"
+            )
+        for name in ("payload_kg", "friction_scale", "start_l"):
+            if getattr(self, name)[0] <= 0:
+                raise ValueError(f"Task.{name} must be > 0 (got {getattr(self, name)!r})")
         for name in ("stribeck_velocity", "d0"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v > 0):
@@ -168,6 +183,12 @@ class _Episodes:
         self.prev = pos
         return np.concatenate([pos, vel, self.targets], axis=1)
 
+    def set_target(self, i: int, target: np.ndarray) -> None:
+        """Replaces env ``i``'s target (after its reset)."""
+        self.targets[i] = target
+        params, stiction, state, _ = self.episodes[i]
+        self.episodes[i] = (params, stiction, state, np.array(target, dtype=np.float64))
+
     def first_obs(self, i: int) -> np.ndarray:
         return np.concatenate([self.prev[i], np.zeros(5), self.targets[i]])
 
@@ -184,6 +205,33 @@ class _Episodes:
         self.t += 1
         truncated = self.t >= task.episode_steps
         return obs, reward, truncated, states
+
+
+#: The keys ``reset(options=...)`` takes.
+RESET_OPTIONS = ("target",)
+
+
+def _target_option(task: Task, options: Optional[dict]) -> Optional[np.ndarray]:
+    """The target ``reset(options=...)`` asks for, checked (``None``: drawn as usual)."""
+    if not options:
+        return None
+    unknown = set(options) - set(RESET_OPTIONS)
+    if unknown:
+        raise ValueError(
+            f"reset options {sorted(unknown)} are not known; the options are {list(RESET_OPTIONS)}"
+        )
+    if "target" not in options:
+        return None
+    t = np.asarray(options["target"], dtype=np.float64)
+    if t.shape != (2,) or not np.all(np.isfinite(t)):
+        raise ValueError(f"options['target'] must be two finite numbers (x*, y*) [m] (got {t!r})")
+    for v, (lo, hi), name in ((t[0], task.start_x, "start_x"), (t[1], task.start_y, "start_y")):
+        if not lo <= v <= hi:
+            raise ValueError(
+                f"options['target'] {v} is outside Task.{name} = ({lo}, {hi}) m "
+                f"(the observation space's bounds)"
+            )
+    return t
 
 
 def _task_from(task: Optional[Task], overrides: dict) -> Task:
@@ -206,7 +254,7 @@ class CraneAntiSwayEnv(gym.Env):
     **task_fields)``; ``params`` (a ``Params``, dict or TOML path) is the nominal crane that
     each episode randomises."""
 
-    metadata = {"render_modes": []}
+    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 50}
 
     def __init__(
         self,
@@ -216,7 +264,13 @@ class CraneAntiSwayEnv(gym.Env):
         **task_fields: Any,
     ) -> None:
         self.task = _task_from(task, task_fields)
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"render_mode must be one of {self.metadata['render_modes']} or None "
+                f"(got {render_mode!r})"
+            )
         self.render_mode = render_mode
+        self._window: Optional[_render.Window] = None
         self.observation_space = _observation_space(self.task)
         self.action_space = _action_space()
         self._core = _Episodes(1, self.task, _params_from(params))
@@ -224,9 +278,34 @@ class CraneAntiSwayEnv(gym.Env):
 
     def reset(self, *, seed: Optional[int] = None, options: Optional[dict] = None):
         super().reset(seed=seed)
+        target = _target_option(self.task, options)
         self._core.reset_one(0, self.np_random)
+        if target is not None:
+            self._core.set_target(0, target)
         self._started = True
+        if self.render_mode == "human":
+            self.render()
         return self._core.first_obs(0), self._info(self._core.batch.states[0])
+
+    def render(self):
+        """The current frame (``"rgb_array"``), or shows it (``"human"``); ``None`` without a
+        render mode (Gymnasium's convention)."""
+        if self.render_mode is None:
+            return None
+        img = _render.frame(
+            self._core.batch.states[0], self._core.batch.payload[0], self._core.targets[0]
+        )
+        if self.render_mode == "rgb_array":
+            return img
+        if self._window is None:
+            self._window = _render.Window(self.metadata["render_fps"])
+        self._window.show(img)
+        return None
+
+    def close(self):
+        if self._window is not None:
+            self._window.close()
+            self._window = None
 
     def step(self, action):
         if not self._started:
@@ -234,6 +313,8 @@ class CraneAntiSwayEnv(gym.Env):
         obs, reward, truncated, states = self._core.step(np.asarray(action)[None, :])
         if truncated[0]:
             self._started = False
+        if self.render_mode == "human":
+            self.render()
         return obs[0], float(reward[0]), False, bool(truncated[0]), self._info(states[0])
 
     def _info(self, state: np.ndarray) -> dict:
@@ -245,6 +326,7 @@ class CraneAntiSwayVectorEnv(gym.vector.VectorEnv):
     Env ``i`` reset with seed ``s`` equals ``CraneAntiSwayEnv`` reset with seed ``s + i``."""
 
     metadata = {"render_modes": [], "autoreset_mode": gym.vector.AutoresetMode.NEXT_STEP}
+    # (render one env of it with CraneAntiSwayEnv: the vector env draws nothing)
 
     def __init__(
         self,
@@ -258,6 +340,11 @@ class CraneAntiSwayVectorEnv(gym.vector.VectorEnv):
             raise ValueError(f"num_envs must be >= 1 (got {num_envs})")
         self.num_envs = int(num_envs)
         self.task = _task_from(task, task_fields)
+        if render_mode is not None:
+            raise ValueError(
+                "the vector env renders nothing (render_mode=None); render a single "
+                "CraneAntiSwayEnv instead"
+            )
         self.render_mode = render_mode
         self.single_observation_space = _observation_space(self.task)
         self.single_action_space = _action_space()
@@ -273,8 +360,11 @@ class CraneAntiSwayVectorEnv(gym.vector.VectorEnv):
             if len(seeds) != self.num_envs:
                 raise ValueError(f"expected {self.num_envs} seeds, got {len(seeds)}")
             self._rngs = [seeding.np_random(s)[0] for s in seeds]
+        target = _target_option(self.task, options)
         for i in range(self.num_envs):
             self._core.reset_one(i, self._rngs[i])
+            if target is not None:
+                self._core.set_target(i, target)
         self._needs_reset[:] = False
         obs = np.stack([self._core.first_obs(i) for i in range(self.num_envs)])
         return obs, {"target": self._core.targets.copy()}

@@ -117,3 +117,54 @@ def test_bad_env_configuration_raises():
     env.reset(seed=0)
     with pytest.raises(ct.InputError):
         env.step(np.array([np.nan, 0, 0], dtype=np.float32))
+
+
+def test_rgb_array_render_draws_the_crane_headless():
+    env = gym.make("CraneAntiSway-v0", render_mode="rgb_array", episode_steps=40)
+    assert env.metadata["render_modes"] == ["rgb_array", "human"]
+    env.reset(seed=3)
+    first = env.render()
+    assert first.shape == (300, 600, 3) and first.dtype == np.uint8
+    assert len(np.unique(first.reshape(-1, 3), axis=0)) >= 4, "trolley, rope, payload, target"
+    for _ in range(30):
+        env.step(np.array([12.0, 12.0, 0.0], dtype=np.float32))
+    moved = env.render()
+    assert moved.shape == first.shape
+    assert np.any(moved != first), "the picture follows the crane"
+    env.close()
+    assert CraneAntiSwayEnv().render() is None, "no render mode: nothing drawn"
+    with pytest.raises(ValueError, match="render_mode"):
+        CraneAntiSwayEnv(render_mode="ascii")
+
+
+def test_human_render_runs_headless_when_matplotlib_is_there(monkeypatch):
+    pytest.importorskip("matplotlib")
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    env = CraneAntiSwayEnv(render_mode="human", episode_steps=5)
+    env.reset(seed=1)
+    env.step(np.zeros(3, dtype=np.float32))
+    env.close()
+
+
+def test_reset_options_set_the_target_and_unknown_ones_are_refused():
+    env = CraneAntiSwayEnv(episode_steps=10)
+    obs, info = env.reset(seed=7, options={"target": (0.2, 0.3)})
+    np.testing.assert_array_equal(info["target"], [0.2, 0.3])
+    np.testing.assert_array_equal(obs[-2:], [0.2, 0.3])
+    # the rest of the seeded episode is the one drawn without the option
+    obs0, _ = CraneAntiSwayEnv(episode_steps=10).reset(seed=7)
+    np.testing.assert_array_equal(obs[:10], obs0[:10])
+    with pytest.raises(ValueError, match="not known"):
+        env.reset(options={"goal": (0.2, 0.3)})
+    with pytest.raises(ValueError, match="outside"):
+        env.reset(options={"target": (5.0, 0.3)})
+    venv = CraneAntiSwayVectorEnv(num_envs=2, episode_steps=10)
+    _, info = venv.reset(seed=7, options={"target": (0.25, 0.35)})
+    np.testing.assert_array_equal(info["target"], [[0.25, 0.35], [0.25, 0.35]])
+
+
+def test_task_ranges_are_checked_when_made_not_at_reset():
+    with pytest.raises(ValueError, match="stiction_ratio"):
+        ct.envs.Task(stiction_ratio=(0.5, 0.9))
+    with pytest.raises(ValueError, match="payload_kg"):
+        ct.envs.Task(payload_kg=(0.0, 0.5))

@@ -104,9 +104,9 @@ fn run_plot(
     th: &Thresholds,
     info: &DriveInfo,
 ) -> Result<(), Dyn> {
-    let mut svg = String::from(crate::PLOT_MARK);
+    let mut svg = String::new();
     draw_run(&mut svg, r, base, fin, th, info)?;
-    crane_ident::atomic::write(path, svg)?;
+    crane_ident::atomic::write(path, crate::mark_plot(&svg))?;
     Ok(())
 }
 
@@ -220,9 +220,9 @@ fn force_velocity(
     th: &Thresholds,
     info: &DriveInfo,
 ) -> Result<(), Dyn> {
-    let mut svg = String::from(crate::PLOT_MARK);
+    let mut svg = String::new();
     draw_force_velocity(&mut svg, held, baseline, final_, th, info)?;
-    crane_ident::atomic::write(path, svg)?;
+    crane_ident::atomic::write(path, crate::mark_plot(&svg))?;
     Ok(())
 }
 
