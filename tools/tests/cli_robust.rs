@@ -248,6 +248,22 @@ fn demo_then_validate_and_the_data_set_repros() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("warning"), "{}", stderr(&o));
     std::fs::write(&truth, kept).unwrap();
+    // --params (a crane file) on single-axis data: refused, not ignored
+    std::fs::create_dir_all(d.join("axis")).unwrap();
+    std::fs::write(d.join("axis/dataset.toml"), "").unwrap();
+    let mut csv = String::from("t,x,u\n");
+    for k in 0..200 {
+        csv.push_str(&format!(
+            "{},{},{}\n",
+            k as f64 * 0.01,
+            0.001 * k as f64,
+            1.0
+        ));
+    }
+    std::fs::write(d.join("axis/run.csv"), csv).unwrap();
+    let o = crane(&d, &["diagnose", "axis", "--params", "out/params.toml"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--params"), "{}", stderr(&o));
 
     let mut child = Command::new(env!("CARGO_BIN_EXE_crane"))
         .current_dir(&d)
