@@ -10,6 +10,10 @@ use crane_model::{Config, Crane};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+/// Steps between two looks at Python's signals in a long `advance` (16384 steps: a few
+/// milliseconds of model work, so Ctrl-C answers at once).
+pub const SIGNAL_STEPS: usize = 1 << 14;
+
 /// Builds a [`Setup`] from the Python arguments shared by `Crane`, `rollout`, `rollouts`.
 #[allow(clippy::too_many_arguments)]
 pub fn setup_from(
@@ -83,17 +87,26 @@ impl PyCrane {
     }
 
     /// `n` steps with the voltages `u` held; returns the new state. On a rejected step the
-    /// simulator stays after the last accepted one (`StepError.step` tells which).
+    /// simulator stays after the last accepted one (`StepError.step` tells which). Ctrl-C
+    /// is seen every [`SIGNAL_STEPS`] steps (`KeyboardInterrupt`, the state after the last
+    /// step taken).
     fn advance<'py>(
         &mut self,
         py: Python<'py>,
         u: &Bound<'py, PyAny>,
-        n: usize,
+        n: i64,
     ) -> PyResult<Bound<'py, PyAny>> {
         let u: [f64; 3] = u.extract().map_err(|_| {
             Failure::Input("`u`: expected 3 voltages [u_x, u_y, u_l]".into()).into_pyerr(py)
         })?;
+        let n = usize::try_from(n).map_err(|_| {
+            Failure::Input(format!("`n`: the number of steps must be >= 0 (got {n})"))
+                .into_pyerr(py)
+        })?;
         for k in 0..n {
+            if k % SIGNAL_STEPS == SIGNAL_STEPS - 1 {
+                py.check_signals()?;
+            }
             self.crane.step(u).map_err(|err| {
                 Failure::Step {
                     err,

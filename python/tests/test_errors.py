@@ -160,3 +160,28 @@ def test_no_input_aborts_the_process():
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert p.returncode == 0, p.stderr
     assert "survived" in p.stdout
+
+
+def test_negative_step_count_is_an_input_error():
+    with pytest.raises(ct.InputError, match="n"):
+        ct.Crane().advance([0.0, 0.0, 0.0], -1)
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGALRM")
+def test_a_long_advance_answers_ctrl_c():
+    import signal
+    import time
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    old = signal.signal(signal.SIGALRM, interrupt)
+    signal.setitimer(signal.ITIMER_REAL, 0.2)
+    t0 = time.monotonic()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            ct.Crane().advance([0.0, 0.0, 0.0], 10**12)
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+    assert time.monotonic() - t0 < 10, "the interrupt waited for the loop"
