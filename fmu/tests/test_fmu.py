@@ -226,6 +226,17 @@ def test_wrong_parameter_is_an_error_status_and_a_logged_message(description, sl
     assert (fmi2Error, "invalid parameter: `x.gain` must be > 0 (got -3.2)") in log.messages
     free(slave)
 
+    # An empty travel names both limits, so setting x.max = -1 is not blamed on x.min alone.
+    log = Log()
+    slave.instantiate(callbacks=log.callbacks)
+    slave.setupExperiment(startTime=0.0)
+    slave.enterInitializationMode()
+    slave.setReal([vr(description, "x.max")], [-1.0])
+    with pytest.raises(FMICallException):
+        slave.exitInitializationMode()
+    assert any(s == fmi2Error and "`x.max`" in m for s, m in log.messages), log.messages
+    free(slave)
+
     # Through simulate_fmu as a user would: an exception, no crash.
     with pytest.raises(FMICallException):
         simulate_fmu(FMU, stop_time=0.01, output_interval=H,

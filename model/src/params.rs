@@ -158,6 +158,15 @@ pub struct Error {
 
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.problem == Problem::EmptyRange {
+            // (the pair is wrong, not one of them: whichever the user just set is named)
+            let axis = self.field.strip_suffix(".min").unwrap_or(self.field);
+            return write!(
+                f,
+                "`{axis}.min` must be below `{axis}.max`: the travel [min, max] is empty (min = {})",
+                self.value
+            );
+        }
         let what = match self.problem {
             Problem::NotFinite => "must be finite",
             Problem::NotPositive => "must be > 0",
