@@ -226,7 +226,14 @@ def test_wrong_parameter_is_an_error_status_and_a_logged_message(description, sl
     assert (fmi2Error, "invalid parameter: `x.gain` must be > 0 (got -3.2)") in log.messages
     free(slave)
 
-    # An empty travel names both limits, so setting x.max = -1 is not blamed on x.min alone.
+    # Through simulate_fmu as a user would: an exception, no crash.
+    with pytest.raises(FMICallException):
+        simulate_fmu(FMU, stop_time=0.01, output_interval=H,
+                     start_values={"state.q[2]": 0.9})  # rope longer than rope.max
+
+
+def test_an_empty_travel_names_the_limit_the_user_set(description, slave):
+    """``x.max = -1`` (below ``x.min = 0``): the message names ``x.max`` too."""
     log = Log()
     slave.instantiate(callbacks=log.callbacks)
     slave.setupExperiment(startTime=0.0)
@@ -236,11 +243,6 @@ def test_wrong_parameter_is_an_error_status_and_a_logged_message(description, sl
         slave.exitInitializationMode()
     assert any(s == fmi2Error and "`x.max`" in m for s, m in log.messages), log.messages
     free(slave)
-
-    # Through simulate_fmu as a user would: an exception, no crash.
-    with pytest.raises(FMICallException):
-        simulate_fmu(FMU, stop_time=0.01, output_interval=H,
-                     start_values={"state.q[2]": 0.9})  # rope longer than rope.max
 
 
 def test_step_not_a_multiple_of_h_is_an_error(description, slave):
