@@ -10,6 +10,8 @@ use std::path::Path;
 pub fn study(out: &Path, json: bool, quick: bool, budget: f64, force: bool) -> Result<()> {
     let outputs = Outputs::new(force);
     let jpath = out.join("study.json");
+    // refuse before minutes of work: the folder (a file there is no folder) and the JSON
+    outputs.check_dir(out)?;
     outputs.check(&jpath)?;
     let opts = study::Options {
         work_precision: !quick,
