@@ -670,12 +670,31 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
         measures.insert("published_sim_force_err_estimation_pct".into(), 5.85);
         measures.insert("published_sim_force_err_validation_pct".into(), 8.94);
     }
+    // the baseline's worst held-out force error [%] over the inverse model and, where a
+    // controller is declared, the closed-loop simulations
+    let no_fit_pct = measures
+        .iter()
+        .filter(|(k, _)| k.starts_with("closed_loop_force_err_held_out_"))
+        .map(|(_, v)| *v)
+        .fold(100.0 * (sse0 / fnorm_h).sqrt(), f64::max);
     let (verdict, reason) = match findings.first() {
         Some(f) => (
             Verdict::Found(f.cause),
             format!(
                 "{} cuts the held-out force NMAE from {:.3} % to {:.3} %",
                 f.cause, f.nmae_before, f.nmae_after
+            ),
+        ),
+        // `none` only when the baseline fits: a held-out force error at or above the
+        // force itself (what predicting zero force scores), by the inverse model or in the
+        // declared closed loop, is no fit at all (a wrong gain or unit); with nothing found
+        // that is unexplained
+        None if no_fit_pct >= 100.0 => (
+            Verdict::Unexplained,
+            format!(
+                "the baseline does not fit: its held-out force error is {no_fit_pct:.0} % of \
+                 the force (predicting zero force scores 100 %); check the gain and the \
+                 units; no candidate explains it"
             ),
         ),
         None => (

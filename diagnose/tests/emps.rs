@@ -8,9 +8,14 @@ use std::path::PathBuf;
 const GTAU: f64 = 35.150651882485;
 
 fn emps() -> Dataset {
+    emps_with_gain(GTAU)
+}
+
+/// The EMPS data set with the drive gain `gain` [N/V] declared.
+fn emps_with_gain(gain: f64) -> Dataset {
     let dir = crane_ident::shared_data::root().join("emps");
     let mut spec = DatasetSpec::minimal(0.0);
-    spec.gain_n_per_v = Some(GTAU);
+    spec.gain_n_per_v = Some(gain);
     spec.columns.insert("x".into(), "qm".into());
     spec.columns.insert("u".into(), "vir".into());
     // the rig's controller, as `examples/emps` declares it: closed-loop data
@@ -199,4 +204,27 @@ fn emps_with_a_long_rest_keeps_its_baseline_and_verdict() {
             .iter()
             .all(|f| f.cause != crane_diagnose::Cause::InputDeadzone));
     }
+}
+
+/// Issue 22: a wrong gain (1e-9 N/V declared) makes the closed-loop simulation miss the force
+/// by hundreds of percent; the verdict is then `unexplained`, never `none`.
+#[test]
+fn emps_with_a_wrong_gain_is_not_called_none() {
+    if crane_ident::shared_data::require("emps").is_none() {
+        return;
+    }
+    let r = diagnose_dataset(&emps_with_gain(1e-9), &opts(Baseline::Auto)).expect("diagnoses");
+    assert_eq!(
+        r.verdict,
+        crane_diagnose::Verdict::Unexplained,
+        "{}",
+        r.verdict_reason
+    );
+    assert!(
+        r.verdict_reason.contains("does not fit"),
+        "{}",
+        r.verdict_reason
+    );
+    let right = diagnose_dataset(&emps(), &opts(Baseline::Auto)).expect("diagnoses");
+    assert_ne!(right.verdict, crane_diagnose::Verdict::Unexplained);
 }

@@ -112,7 +112,11 @@ fn implausible_options_are_refused() {
     let o = crane(&d, &["study", "--out", "afile"]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("not a directory"), "{}", stderr(&o));
-    assert!(t0.elapsed() < Duration::from_secs(20), "refused after {:?}", t0.elapsed());
+    assert!(
+        t0.elapsed() < Duration::from_secs(20),
+        "refused after {:?}",
+        t0.elapsed()
+    );
     // about 12 days of work: priced by a pilot simulation and refused without --yes, at once
     let t0 = Instant::now();
     let o = crane(&d, &["mc", "--sims", "10000000", "--duration", "3600"]);
