@@ -61,16 +61,21 @@ pub fn write_all(
     crane_ident::atomic::create_dir(dir)?;
     for (i, r) in held.iter().enumerate() {
         let path = dir.join(format!("heldout_{}.svg", stem(&r.run.name)));
-        run_plot(&path, r, &baseline.sims[i], &final_.sims[i], th, info)?;
+        write_svg(&path, |svg| {
+            draw_run(svg, r, &baseline.sims[i], &final_.sims[i], th, info)
+        })?;
     }
-    force_velocity(
-        &dir.join("force_velocity.svg"),
-        held,
-        baseline,
-        final_,
-        th,
-        info,
-    )?;
+    write_svg(&dir.join("force_velocity.svg"), |svg| {
+        draw_force_velocity(svg, held, baseline, final_, th, info)
+    })
+}
+
+/// Draws a plot into a string and writes it atomically to `path`, with the tool's mark
+/// ([`crate::mark_plot`]).
+fn write_svg(path: &Path, draw: impl FnOnce(&mut String) -> Result<(), Dyn>) -> Result<(), Dyn> {
+    let mut svg = String::new();
+    draw(&mut svg)?;
+    crane_ident::atomic::write(path, crate::mark_plot(&svg))?;
     Ok(())
 }
 
@@ -93,21 +98,6 @@ fn stick_intervals(r: &Prepared, th: &Thresholds) -> Vec<(f64, f64)> {
         out.push((s as f64 * r.run.dt, r.v.len() as f64 * r.run.dt));
     }
     out
-}
-
-/// Draws one held-out run's plot and writes it atomically to `path`.
-fn run_plot(
-    path: &Path,
-    r: &Prepared,
-    base: &[f64],
-    fin: &[f64],
-    th: &Thresholds,
-    info: &DriveInfo,
-) -> Result<(), Dyn> {
-    let mut svg = String::new();
-    draw_run(&mut svg, r, base, fin, th, info)?;
-    crane_ident::atomic::write(path, crate::mark_plot(&svg))?;
-    Ok(())
 }
 
 fn draw_run(
@@ -209,21 +199,6 @@ fn friction_curve(p: &DriveParams, vmax: f64) -> (Curve, Curve) {
         })
         .collect();
     (pos, neg)
-}
-
-/// Draws the force-velocity plot and writes it atomically to `path`.
-fn force_velocity(
-    path: &Path,
-    held: &[&Prepared],
-    baseline: &Scored,
-    final_: &Scored,
-    th: &Thresholds,
-    info: &DriveInfo,
-) -> Result<(), Dyn> {
-    let mut svg = String::new();
-    draw_force_velocity(&mut svg, held, baseline, final_, th, info)?;
-    crane_ident::atomic::write(path, crate::mark_plot(&svg))?;
-    Ok(())
 }
 
 fn draw_force_velocity(
