@@ -87,6 +87,9 @@ pub struct Period<R: Real> {
     pub command: [R; 3],
     /// The observer's update, or why it was rejected.
     pub update: Result<Update<R>, Rejected>,
+    /// Voltages [V] the update predicted with: those applied during the period that just
+    /// ended (what the friction monitor takes as the drive force at rest).
+    pub predicted: [R; 3],
 }
 
 /// Observer + feedforward + PD on the estimate.
@@ -132,7 +135,8 @@ impl<R: Real> Controller<R> {
     /// One period: update the twin with the voltages applied during the last period and the
     /// positions `y` measured now, then compute the command for reference `r`.
     pub fn period(&mut self, y: [R; 5], r: &Reference<R>) -> Period<R> {
-        let update = self.observer.update(self.applied, y);
+        let predicted = self.applied;
+        let update = self.observer.update(predicted, y);
         let est = self.observer.state();
         let modes: [Mode; 3] = self.observer.modes();
         let dist = if self.use_dist {
@@ -153,7 +157,11 @@ impl<R: Real> Controller<R> {
             let fb = self.kp[i] * (r.pos[i] - est.q[i]) + self.kd[i] * (r.vel[i] - est.qd[i]);
             command[i] = saturate(ff[i] + fb);
         }
-        Period { command, update }
+        Period {
+            command,
+            update,
+            predicted,
+        }
     }
 
     /// Records the voltages the drivers really applied (what the next update predicts with).

@@ -14,6 +14,7 @@ pub mod digest;
 pub mod fastmath;
 pub mod feedforward;
 pub mod io;
+pub mod monitor;
 pub mod observer;
 pub mod plant;
 pub mod prng;

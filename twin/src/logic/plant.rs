@@ -9,7 +9,7 @@ use super::digest::{write_state, Fnv};
 use super::io::{pwm_command, pwm_volts, Channel, EncoderScale, Pwm};
 use super::observer::Counters;
 use core::fmt::Write;
-use crane_model::{Config, Crane, Error, Params, Real, State};
+use crane_model::{Config, Crane, Error, Extensions, Params, Real, State};
 
 /// The simulated rig's "true" parameters: the nominal ones with X dry friction 40 % higher,
 /// Y dry friction 30 % lower, X viscous friction 10 % higher, rope dry friction +1.5 N and a
@@ -61,6 +61,24 @@ impl SimPlant {
             substeps: n,
             errors: 0,
         })
+    }
+
+    /// Switches on model extensions (localised friction, stiction...) in the plant: the faults
+    /// the twin's friction monitor has to find. Errors name the field.
+    pub fn with_extensions(mut self, ext: &Extensions) -> Result<Self, Error> {
+        self.crane = self.crane.with_extensions(ext)?;
+        Ok(self)
+    }
+
+    /// Changes the plant's parameters and extensions from now on, keeping its state (a fault
+    /// that appears while the rig runs). On an error the plant is unchanged.
+    pub fn retune(&mut self, params: &Params, ext: &Extensions) -> Result<(), Error> {
+        let config = Config {
+            h: self.crane.h(),
+            ..Config::default()
+        };
+        self.crane = Crane::new(params, config, self.crane.state())?.with_extensions(ext)?;
+        Ok(())
     }
 
     /// Sets the PWM command of axis `i`.

@@ -1,0 +1,770 @@
+//! The friction monitor: while the crane runs, a map of what the twin's friction model gets
+//! wrong, per drive axis, direction and position, and alarms when it changes.
+//!
+//! Every period [`Monitor::update`] takes the observer (positions, velocities, modes, the
+//! disturbance force `d` and the residual mean square) and the voltages applied:
+//! - an axis that slides, settled (the observer's transient after a restart has decayed to 1 %)
+//!   and faster than two encoder steps per period, adds the residual friction `-d sign(v)` [N]
+//!   to the map of its direction ([`map::SlidingMap`]);
+//! - an axis that rests feeds its breakaway watch ([`breakaway::BreakawayWatch`]);
+//! - the residual mean square feeds a slow level per axis.
+//!
+//! Commissioning: for [`Settings::commissioning`] periods nothing is judged; the maps learn
+//! their reference (what the identified model still misses on this rig) and their bands (how
+//! much the current levels scatter around it in normal operation). Afterwards references and
+//! bands follow slow changes (a temperature drift over an hour) while no alarm of their map
+//! stands.
+//!
+//! Evaluation: one of the six maps (axis, direction) per period, round robin, O(64) work.
+//! Every threshold is [`Settings::k`] standard deviations of a learned scatter, never a force
+//! constant: the monitor is as sensitive as the rig is quiet. Alarms
+//! ([`alarm::AlarmKind`]) are debounced ([`alarm::Debounce`]): a condition must hold in two
+//! evaluations with fresh data between them (a new pass over a bin, half a memory of the
+//! travel level, a new restart, half a second of residual).
+//!
+//! State: everything lives in this struct (about 7.5 KiB, see [`Monitor::RAM_BYTES`]), no heap,
+//! `f32` statistics whatever the twin's scalar type. It is not kept over a reset: after a
+//! watchdog reset the firmware builds a new monitor, which commissions again and judges
+//! nothing meanwhile (an alarm that stood is raised again if its cause is still there).
+
+pub mod alarm;
+pub mod breakaway;
+pub mod map;
+
+use super::control::LoopConfig;
+use super::observer::Observer;
+use alarm::{Alarm, AlarmKind, Debounce};
+use breakaway::BreakawayWatch;
+use crane_model::friction::dry_at;
+use crane_model::{Axis, Direction, Mode, Real};
+use map::{MapSettings, SlidingMap, BINS};
+
+/// Drive axes watched: the trolley's X and Y. The rope drive is not watched: its residual
+/// carries the payload's weight and the swing's tension, not only friction, and it moves in
+/// few operations, so its maps stay thin (measured: the host scenarios gave 0.3 false alarms
+/// an hour from the rope's maps alone, twin/README.md "Friction monitor").
+pub const AXES: [Axis; 2] = [Axis::X, Axis::Y];
+
+/// Number of watched axes.
+const N: usize = AXES.len();
+
+/// Monitor settings, all derived from the loop (period, observer gains, encoder) by
+/// [`Settings::for_loop`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    /// How the maps learn.
+    pub map: MapSettings,
+    /// Alarm threshold in standard deviations of the learned scatter. 5: a Gaussian level
+    /// passes it with probability 2.9e-7; the maps give about 10^4 independent looks an hour
+    /// (64 bins, 6 maps, about 25 passes), and two confirmations are needed.
+    pub k: f32,
+    /// Threshold of the local check in standard deviations of a bin's band. Lower than `k`:
+    /// a local change is confirmed by a second, independent pass over the same bins (or by
+    /// the other direction's map), so the chance of a false one is about the square of a
+    /// single tail (4: 3.2e-5 squared).
+    pub k_local: f32,
+    /// Periods of commissioning (nothing judged).
+    pub commissioning: u64,
+    /// Periods an axis must have slid before its samples are used (observer transient).
+    pub settle: u32,
+    /// Lag [s] of the disturbance estimate behind the plant: a sample taken at `x` moving at
+    /// `v` is filed at `x - v lag`, so both directions' maps put a rough spot at its place.
+    pub lag: f32,
+    /// Least speed [m/s] of a sample per axis: two encoder steps per period.
+    pub v_min: [f32; N],
+    /// Periods the twin must hold an axis stopped before it rests (a reversal is no rest).
+    pub min_stop: u32,
+    /// Distance [m] per axis the position must leave its place at rest to count as a restart:
+    /// the observer's stick band (quantisation and count noise stay within it).
+    pub band: [f32; N],
+    /// Most bins out of band that still make a local change (more is a travel-wide one).
+    pub local_bins: usize,
+}
+
+impl Settings {
+    /// Settings for a loop `cfg`: the settle time from the observer's pole (`theta^3 = 1 -
+    /// alpha`, the transient below 1 %), the least speed from the encoder step, five minutes
+    /// of commissioning, 50 ms at rest for a breakaway, and a local change up to 4 bins wide
+    /// (3 cm on X: a rough spot, not a region).
+    pub fn for_loop(cfg: &LoopConfig) -> Self {
+        let t3 = 1.0 - cfg.gains.alpha;
+        let mut p = 1.0;
+        let mut settle = 0u32;
+        while p > 1e-6 && settle < 10_000 && t3 > 0.0 && t3 < 1.0 {
+            p *= t3;
+            settle += 1;
+        }
+        let per = if cfg.period > 0.0 { cfg.period } else { 2e-3 };
+        let v = |i: usize| (2.0 * cfg.scale.res[i] / per) as f32;
+        let k = 5.0;
+        Settings {
+            map: MapSettings {
+                gate: k * k,
+                ..MapSettings::default()
+            },
+            k,
+            k_local: 4.5,
+            commissioning: (300.0 / per) as u64,
+            settle,
+            lag: lag_periods(cube_root(t3)) as f32 * per as f32,
+            v_min: [v(0), v(1)],
+            min_stop: (0.05 / per) as u32,
+            band: [
+                cfg.gains.stick_band[0] as f32,
+                cfg.gains.stick_band[1] as f32,
+            ],
+            local_bins: 4,
+        }
+    }
+}
+
+/// Cube root of `x` in `[0, 1]` by Newton's iteration (no libm in this path).
+fn cube_root(x: f64) -> f64 {
+    if x <= 0.0 {
+        return 0.0;
+    }
+    let mut y = 1.0;
+    for _ in 0..60 {
+        y -= (y * y * y - x) / (3.0 * y * y);
+    }
+    y
+}
+
+/// Lag of the disturbance estimate in periods for an observer pole `theta`: LAG_POLES times
+/// the time constant of one pole, `theta / (1 - theta)`.
+fn lag_periods(theta: f64) -> f64 {
+    if theta <= 0.0 || theta >= 1.0 {
+        return 0.0;
+    }
+    LAG_POLES * theta / (1.0 - theta)
+}
+
+/// See [`lag_periods`].
+const LAG_POLES: f64 = 1.0;
+
+// The monitor's memory bound (issue 21: the maps under 8 KiB), on every target.
+const _: () = assert!(Monitor::RAM_BYTES < 8 * 1024);
+
+/// Freshness and debounce of one map's checks.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Checks {
+    drift: Debounce,
+    local: Debounce,
+    stiction: Debounce,
+    /// Bins crossed by the current slide (lowest, highest).
+    span: Option<(u8, u8)>,
+    /// Bin of the local candidate, and passes over it since the check was last fed.
+    candidate: Option<usize>,
+    passes: u16,
+    entered: bool,
+    last_bin: usize,
+    /// Mean band of the judged bins at the last evaluation [N^2] (floor of every bin's band).
+    pooled: f32,
+    /// Learned variance of the travel's level [N^2], and the evaluations it learned from.
+    level_band: f32,
+    level_n: u32,
+    /// The level at the last evaluation [N].
+    level: f32,
+}
+
+/// Moves of a map within which a bin must have had a sample to be judged by the local
+/// check: a bin not crossed for longer is stale evidence while the travel changes slowly.
+const FRESH_MOVES: u16 = 8;
+
+/// Moves over which the level's band is learned before it is judged.
+const LEVEL_LEARN: u32 = 16;
+/// Weight of a move's level in its band once learned: about 256 moves.
+const LEVEL_SLOW: f32 = 1.0 / 256.0;
+/// Judged bins a move must cross to give a level (a median of fewer is no travel level: a
+/// rough spot of up to `local_bins` would move it).
+const MOVE_BINS: usize = 9;
+
+/// Median of `v` (reordered), 0 for an empty slice.
+fn median(v: &mut [f32]) -> f32 {
+    let n = v.len();
+    if n == 0 {
+        return 0.0;
+    }
+    let (_, m, _) = v.select_nth_unstable_by(n / 2, f32::total_cmp);
+    *m
+}
+
+/// The slow level of one axis' residual mean square.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct ResidualWatch {
+    level: f32,
+    mean: f32,
+    var: f32,
+    n: u32,
+    debounce: Debounce,
+}
+
+/// Weight per period of the residual level: one second at 2 ms.
+const RESIDUAL_WEIGHT: f32 = 1.0 / 500.0;
+/// Periods between two checks of the residual level (half its memory).
+const RESIDUAL_EVERY: u64 = 250;
+
+/// The monitor of the three drive axes.
+#[derive(Clone, Debug)]
+pub struct Monitor {
+    settings: Settings,
+    maps: [[SlidingMap; 2]; N],
+    checks: [[Checks; 2]; N],
+    breakaway: [BreakawayWatch; N],
+    residual: [ResidualWatch; N],
+    sliding_for: [u32; N],
+    last_dir: [Option<usize>; N],
+    pending: [Option<Alarm>; 4],
+    period: u64,
+}
+
+fn dir_of(d: usize) -> Direction {
+    if d == 1 {
+        Direction::Positive
+    } else {
+        Direction::Negative
+    }
+}
+
+fn mode_of(d: usize) -> Mode {
+    if d == 1 {
+        Mode::Positive
+    } else {
+        Mode::Negative
+    }
+}
+
+impl Monitor {
+    /// RAM of a monitor [bytes]: the four maps (X and Y, each direction) are most of it,
+    /// 1,564 bytes each. Below 8 KiB, checked when this crate compiles.
+    pub const RAM_BYTES: usize = core::mem::size_of::<Monitor>();
+
+    /// A monitor of a twin whose observer is `obs` (its travel limits set the maps), with
+    /// `settings`.
+    pub fn new<R: Real>(obs: &Observer<R>, settings: Settings) -> Self {
+        let ax = &obs.twin().coeffs().axes;
+        let map = |i: usize| {
+            let lo = ax[i].min.to_f64() as f32;
+            let hi = ax[i].max.to_f64() as f32;
+            [SlidingMap::new(lo, hi), SlidingMap::new(lo, hi)]
+        };
+        Monitor {
+            settings,
+            maps: [map(0), map(1)],
+            checks: [[Checks::default(); 2]; N],
+            breakaway: [BreakawayWatch::default(); N],
+            residual: [ResidualWatch::default(); N],
+            sliding_for: [0; N],
+            last_dir: [None; N],
+            pending: [None; 4],
+            period: 0,
+        }
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// The map of `axis` for direction `dir` (`Positive` or `Negative`; `Both` gives the
+    /// positive one); `None` for an axis not watched.
+    pub fn map(&self, axis: Axis, dir: Direction) -> Option<&SlidingMap> {
+        let d = usize::from(dir != Direction::Negative);
+        self.maps.get(axis.index()).map(|m| &m[d])
+    }
+
+    /// The travel's level of `axis` and `dir` at its last evaluation [N] (the median change
+    /// of the judged bins against their reference) and its learned variance [N^2].
+    pub fn level(&self, axis: Axis, dir: Direction) -> Option<(f32, f32)> {
+        let d = usize::from(dir != Direction::Negative);
+        let c = &self.checks.get(axis.index())?[d];
+        Some((c.level, c.level_band))
+    }
+
+    /// The breakaway watch of `axis` (`None` for an axis not watched).
+    pub fn breakaway(&self, axis: Axis) -> Option<&BreakawayWatch> {
+        self.breakaway.get(axis.index())
+    }
+
+    /// Whether commissioning is over.
+    pub fn commissioned(&self) -> bool {
+        self.period >= self.settings.commissioning
+    }
+
+    /// Periods seen.
+    pub fn period(&self) -> u64 {
+        self.period
+    }
+
+    /// One control period, after the observer's update: `applied` are the voltages [V] the
+    /// drivers applied during the period the observer just predicted. Returns an alarm raised
+    /// in this period or earlier and not yet returned (at most one per call).
+    pub fn update<R: Real>(&mut self, obs: &Observer<R>, applied: [R; 3]) -> Option<Alarm> {
+        let learning = !self.commissioned();
+        let pull = self.swing_pull(obs);
+        for (i, p) in pull.iter().enumerate() {
+            self.axis_period(obs, i, applied[i], *p, learning);
+        }
+        let slot = (self.period % (2 * N as u64)) as usize;
+        self.evaluate(slot / 2, slot % 2, learning);
+        if !learning && self.period % RESIDUAL_EVERY == 0 {
+            for i in 0..N {
+                self.evaluate_residual(i);
+            }
+        }
+        self.period = self.period.saturating_add(1);
+        self.pop()
+    }
+
+    /// One period of axis `i`: its breakaway watch, a map sample when it slides, its
+    /// residual level. `pull` is the payload's pull on it [N].
+    fn axis_period<R: Real>(
+        &mut self,
+        obs: &Observer<R>,
+        i: usize,
+        applied: R,
+        pull: f32,
+        learning: bool,
+    ) {
+        let state = obs.state();
+        let ax = &obs.twin().coeffs().axes[i];
+        let x = state.q[i].to_f64() as f32;
+        let v = state.qd[i].to_f64() as f32;
+        let d = obs.disturbance()[i].to_f64() as f32;
+        let force = (ax.gain * applied).to_f64() as f32 + pull;
+        let dir = match obs.modes()[i] {
+            Mode::Positive => Some(1usize),
+            Mode::Negative => Some(0usize),
+            Mode::Stopped => None,
+        };
+        let (band, min_stop) = (self.settings.band[i], self.settings.min_stop);
+        if let Some((dj, push)) = self.breakaway[i].period(dir.is_none(), x, force, band, min_stop)
+        {
+            let model = dry_at(ax, mode_of(dj), state.q[i]).to_f64() as f32;
+            self.restart(i, dj, x, push, model, learning);
+        }
+        if self.last_dir[i].is_some() && self.last_dir[i] != dir {
+            if let Some(dl) = self.last_dir[i] {
+                self.move_done(i, dl, learning);
+            }
+            self.sliding_for[i] = 0;
+        }
+        self.last_dir[i] = dir;
+        match dir {
+            None => {}
+            Some(dj) => {
+                self.sliding_for[i] = self.sliding_for[i].saturating_add(1);
+                let speed = if v < 0.0 { -v } else { v };
+                if self.sliding_for[i] >= self.settings.settle
+                    && speed >= self.settings.v_min[i]
+                    && x.is_finite()
+                    && d.is_finite()
+                {
+                    let r = if dj == 1 { -d } else { d };
+                    self.sample(i, dj, x - v * self.settings.lag, speed, r);
+                }
+            }
+        }
+        let m = obs.residual_mean_square()[i].to_f64() as f32;
+        if m.is_finite() {
+            self.residual_sample(i, m, learning);
+        }
+    }
+
+    /// The payload's horizontal pull on the trolley [N] along X and Y (rope tension times the
+    /// rope's direction), needed only while X or Y rests past its stop transient: one
+    /// evaluation of the dynamics then, none otherwise.
+    fn swing_pull<R: Real>(&self, obs: &Observer<R>) -> [f32; N] {
+        let resting = self.breakaway.iter().any(BreakawayWatch::resting);
+        if !resting {
+            return [0.0; N];
+        }
+        let q = obs.state().q;
+        let l = q[2];
+        match obs.twin().output() {
+            Ok(o) if l > R::ZERO => {
+                let t = o.tension / l;
+                [
+                    (t * (o.payload[0] - q[0])).to_f64() as f32,
+                    (t * (o.payload[1] - q[1])).to_f64() as f32,
+                ]
+            }
+            _ => [0.0; N],
+        }
+    }
+
+    /// A restart of axis `i` in direction `dj` at `x` after withstanding `push` [N], where
+    /// the model's dry friction is `model` [N]: one breakaway ratio against the sliding
+    /// friction seen there (the model plus the map's current level, or its reference while
+    /// the bin is thin).
+    fn restart(&mut self, i: usize, dj: usize, x: f32, push: f32, model: f32, learning: bool) {
+        let map = &self.maps[i][dj];
+        let b = map.bin(x);
+        let seen = if map.count(b) > self.settings.map.warm {
+            map.current(b)
+        } else {
+            map.reference(b)
+        };
+        let sliding = model + seen;
+        if sliding > 0.25 * model && sliding > 0.0 {
+            let learn = learning || !self.checks[i][dj].stiction.standing();
+            self.breakaway[i].record(dj, push / sliding, learn);
+        }
+    }
+
+    fn sample(&mut self, i: usize, dj: usize, x: f32, speed: f32, r: f32) {
+        let c = &mut self.checks[i][dj];
+        let track = !(c.drift.standing() || c.local.standing());
+        let b = self.maps[i][dj].add(x, speed, r, &self.settings.map, track);
+        let bb = b as u8;
+        c.span = Some(match c.span {
+            Some((lo, hi)) => (lo.min(bb), hi.max(bb)),
+            None => (bb, bb),
+        });
+        if let Some(cb) = c.candidate {
+            // A pass over the candidate counts once it is complete (the axis entered it after
+            // the candidate was set, and left it), so the evaluation after it sees bins updated
+            // by a whole new pass.
+            let near = |a: usize| a + 1 >= cb && a <= cb + 1;
+            if near(b) && !near(c.last_bin) {
+                c.entered = true;
+            } else if !near(b) && near(c.last_bin) && c.entered {
+                c.entered = false;
+                c.passes = c.passes.saturating_add(1);
+            }
+        }
+        c.last_bin = b;
+    }
+
+    fn residual_sample(&mut self, i: usize, m: f32, learning: bool) {
+        let w = &mut self.residual[i];
+        w.level += RESIDUAL_WEIGHT * (m - w.level);
+        // Learn the level's mean and scatter once it has forgotten its start (5 memories).
+        let start = (5.0 / RESIDUAL_WEIGHT) as u32;
+        w.n = w.n.saturating_add(1);
+        if learning && w.n > start {
+            let k = (w.n - start) as f32;
+            let d = w.level - w.mean;
+            w.mean += d / k;
+            w.var += (d * (w.level - w.mean) - w.var) / k;
+        }
+    }
+
+    fn push(&mut self, alarm: Alarm) {
+        if let Some(slot) = self.pending.iter_mut().find(|p| p.is_none()) {
+            *slot = Some(alarm);
+        }
+    }
+
+    fn pop(&mut self) -> Option<Alarm> {
+        let first = self.pending[0].take();
+        self.pending.rotate_left(1);
+        first
+    }
+
+    /// Evaluates the map of axis `i`, direction `dj` (round robin, after commissioning): a
+    /// local pattern and the breakaway ratio.
+    fn evaluate(&mut self, i: usize, dj: usize, learning: bool) {
+        if learning {
+            return;
+        }
+        let local = self.local_check(i, dj);
+        let stiction = self.stiction_check(i, dj);
+        for (kind, direction) in [local, stiction].into_iter().flatten() {
+            self.raise(i, kind, direction);
+        }
+    }
+
+    fn raise(&mut self, i: usize, kind: AlarmKind, direction: Direction) {
+        self.push(Alarm {
+            kind,
+            axis: AXES[i],
+            direction,
+            period: self.period,
+        });
+    }
+
+    /// A slide of axis `i` in direction `dj` ended: the travel's level seen by that move, the
+    /// median change of the judged bins it crossed (a rough spot moves a few bins, not the
+    /// median; bins the move did not cross are not stale evidence). Moves over fewer than
+    /// [`MOVE_BINS`] judged bins give no level. The level's band is its variance over moves,
+    /// learned over [`LEVEL_LEARN`] moves, then tracked slowly by the levels inside it while
+    /// no alarm of the map stands. Also refreshes the pooled band (mean band of the judged bins).
+    fn move_done(&mut self, i: usize, dj: usize, learning: bool) {
+        let s = self.settings.map;
+        let k2 = self.settings.k * self.settings.k;
+        self.maps[i][dj].end_move();
+        let map = &self.maps[i][dj];
+        let c = &mut self.checks[i][dj];
+        let Some((lo, hi)) = c.span.take() else {
+            return;
+        };
+        let mut devs = [0.0f32; BINS];
+        let mut crossed = 0usize;
+        let mut sum = 0.0f32;
+        let mut judged = 0usize;
+        for b in 0..BINS {
+            let v = map.view(b, &s);
+            if v.judged {
+                sum += v.band;
+                judged += 1;
+                if b >= usize::from(lo) && b <= usize::from(hi) {
+                    devs[crossed] = v.deviation;
+                    crossed += 1;
+                }
+            }
+        }
+        if judged > 0 {
+            c.pooled = sum / judged as f32;
+        }
+        if crossed < MOVE_BINS {
+            return;
+        }
+        let level = median(&mut devs[..crossed]);
+        c.level = level;
+        let standing = c.drift.standing() || c.local.standing();
+        let learned = c.level_n >= LEVEL_LEARN;
+        let inside = level * level <= k2 * c.level_band;
+        if !learned || (!standing && inside) {
+            c.level_n = c.level_n.saturating_add(1);
+            let w = 1.0 / c.level_n as f32;
+            let w = if w > LEVEL_SLOW { w } else { LEVEL_SLOW };
+            c.level_band += w * (level * level - c.level_band);
+        }
+        if learning || !learned {
+            return;
+        }
+        if c.drift.feed(!inside) {
+            self.raise(i, AlarmKind::FrictionDrift { change: level }, dir_of(dj));
+        }
+    }
+
+    /// A local pattern: a few bins out of band against the travel's level and their
+    /// neighbours, confirmed by a later pass over the same place (or by the other direction's
+    /// map flagging the same place: a pass the other way is an independent one).
+    fn local_check(&mut self, i: usize, dj: usize) -> Option<(AlarmKind, Direction)> {
+        let s = self.settings.map;
+        let k2 = self.settings.k_local * self.settings.k_local;
+        let map = &self.maps[i][dj];
+        let other = self.checks[i][1 - dj];
+        // While the whole travel's level is changing (a drift check of the axis pending or
+        // standing) the bins not yet revisited look local: judge no local pattern then.
+        let moving = self.checks[i]
+            .iter()
+            .any(|m| m.drift.pending() || m.drift.standing());
+        let c = &mut self.checks[i][dj];
+        if c.level_n == 0 || moving {
+            return None;
+        }
+        let local = local_pattern(map, &s, c.level, c.pooled, k2, self.settings.local_bins);
+        let near = |a: usize, b: usize| a + 1 >= b && a <= b + 1;
+        let seconded = |l: &Local| {
+            other.candidate.is_some_and(|ob| near(l.peak, ob))
+                && (other.local.pending() || other.local.standing())
+        };
+        let alarm = |l: &Local, both: bool| {
+            let kind = AlarmKind::LocalFriction {
+                position: l.position,
+                width: l.width,
+                change: l.change,
+            };
+            (kind, if both { Direction::Both } else { dir_of(dj) })
+        };
+        match (local, c.candidate) {
+            (Some(l), Some(cb)) if near(l.peak, cb) => {
+                if c.passes > 0 {
+                    c.passes = 0;
+                    return c.local.feed(true).then(|| alarm(&l, false));
+                }
+                None
+            }
+            (Some(l), _) => {
+                c.local = Debounce::default();
+                c.candidate = Some(l.peak);
+                c.passes = 0;
+                c.entered = false;
+                c.local.feed(true);
+                if seconded(&l) && !other.local.standing() {
+                    return c.local.feed(true).then(|| alarm(&l, true));
+                }
+                None
+            }
+            (None, Some(_)) => {
+                if c.passes > 0 {
+                    c.passes = 0;
+                    c.local.feed(false);
+                    if !c.local.standing() && !c.local.pending() {
+                        c.candidate = None;
+                    }
+                }
+                None
+            }
+            (None, None) => None,
+        }
+    }
+
+    /// Breakaway: after a new restart, the recent ratio against the learned one. The recent
+    /// ratio forgets with weight `RECENT`, so its variance is `var * RECENT / (2 - RECENT)`
+    /// for independent restarts.
+    fn stiction_check(&mut self, i: usize, dj: usize) -> Option<(AlarmKind, Direction)> {
+        let k2 = self.settings.k * self.settings.k;
+        if !self.breakaway[i].take_fresh(dj) {
+            return None;
+        }
+        let (mean, var, cur) = self.breakaway[i].stats(dj)?;
+        let band = var * breakaway::RECENT / (2.0 - breakaway::RECENT);
+        let e = cur - mean;
+        self.checks[i][dj]
+            .stiction
+            .feed(e > 0.0 && e * e > k2 * band)
+            .then_some((
+                AlarmKind::StictionRise {
+                    ratio: cur,
+                    learned: mean,
+                },
+                dir_of(dj),
+            ))
+    }
+
+    fn evaluate_residual(&mut self, i: usize) {
+        let k2 = self.settings.k * self.settings.k;
+        let explained = self.checks[i]
+            .iter()
+            .any(|c| c.drift.standing() || c.local.standing() || c.local.pending());
+        let w = &mut self.residual[i];
+        if w.n == 0 || w.var <= 0.0 {
+            return;
+        }
+        let e = w.level - w.mean;
+        if w.debounce.feed(!explained && e > 0.0 && e * e > k2 * w.var) {
+            let alarm = Alarm {
+                kind: AlarmKind::ModelMismatch {
+                    mean_square: w.level,
+                    learned: w.mean,
+                },
+                axis: AXES[i],
+                direction: Direction::Both,
+                period: self.period,
+            };
+            self.push(alarm);
+        }
+    }
+}
+
+/// A local pattern in a map: the contiguous stretch around the bin furthest out of band.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Local {
+    peak: usize,
+    position: f32,
+    width: f32,
+    change: f32,
+}
+
+/// The stretch of bins out of band (beyond the travel's level `level`) around the worst
+/// one, if it is at most `max_bins` wide and at most `max_bins` other bins are out of band.
+fn local_pattern(
+    map: &SlidingMap,
+    s: &MapSettings,
+    level: f32,
+    pooled: f32,
+    k2: f32,
+    max_bins: usize,
+) -> Option<Local> {
+    let out = |b: usize| -> Option<f32> {
+        let v = map.view(b, s);
+        let band = if v.band > pooled { v.band } else { pooled };
+        let e = v.deviation - level;
+        if v.judged && v.age <= FRESH_MOVES && e * e > k2 * band {
+            Some(e)
+        } else {
+            None
+        }
+    };
+    let mut worst: Option<(usize, f32)> = None;
+    let mut count = 0usize;
+    for b in 0..BINS {
+        if let Some(e) = out(b) {
+            count += 1;
+            let a = if e < 0.0 { -e } else { e };
+            if worst.map_or(true, |(_, w)| a > w) {
+                worst = Some((b, a));
+            }
+        }
+    }
+    let (peak, _) = worst?;
+    let sign = out(peak).map_or(0.0, |e| if e < 0.0 { -1.0 } else { 1.0 });
+    let same = |b: usize| out(b).filter(|e| e * sign > 0.0);
+    let mut lo = peak;
+    while lo > 0 && same(lo - 1).is_some() {
+        lo -= 1;
+    }
+    let mut hi = peak;
+    while hi + 1 < BINS && same(hi + 1).is_some() {
+        hi += 1;
+    }
+    let len = hi - lo + 1;
+    if len > max_bins || count > len + max_bins {
+        return None;
+    }
+    // The stretch must stand out against its neighbours (up to three judged bins each side,
+    // past one bin of flank) on the side closer to it, not only against the travel's level: right after a change of
+    // the whole travel, the bins a move has just crossed slowly are updated and look alone
+    // against a median that has not moved yet, but their neighbours moved with them.
+    let side = |bins: &mut dyn Iterator<Item = usize>| -> Option<f32> {
+        let mut sum = 0.0f32;
+        let mut n = 0u8;
+        for b in bins {
+            let v = map.view(b, s);
+            if v.judged && v.age <= FRESH_MOVES {
+                sum += v.deviation - level;
+                n += 1;
+            }
+        }
+        if n > 0 {
+            Some(sum / f32::from(n))
+        } else {
+            None
+        }
+    };
+    let left = side(&mut (lo.saturating_sub(4)..lo.saturating_sub(1)));
+    let right = side(&mut ((hi + 2).min(BINS)..(hi + 5).min(BINS)));
+    let peak_e = out(peak)?;
+    let closer = match (left, right) {
+        (Some(a), Some(b)) => {
+            if (peak_e - a) * sign < (peak_e - b) * sign {
+                a
+            } else {
+                b
+            }
+        }
+        (Some(a), None) | (None, Some(a)) => a,
+        (None, None) => return None,
+    };
+    let contrast = peak_e - closer;
+    let band = map.view(peak, s).band.max(pooled);
+    if contrast * sign <= 0.0 || contrast * contrast <= k2 * band {
+        return None;
+    }
+    let mut wsum = 0.0f32;
+    let mut xsum = 0.0f32;
+    let mut change = 0.0f32;
+    for b in lo..=hi {
+        let e = same(b).unwrap_or(0.0);
+        wsum += e;
+        xsum += e * map.center(b);
+        if e * sign > change * sign {
+            change = e;
+        }
+    }
+    let position = if wsum != 0.0 {
+        xsum / wsum
+    } else {
+        map.center(peak)
+    };
+    Some(Local {
+        peak,
+        position,
+        width: len as f32 * map.bin_width(),
+        change,
+    })
+}
