@@ -8,7 +8,9 @@
 //! 3. cost sections (`BENCH label n`): each of the `n` measured intervals is bracketed by
 //!    calls to [`bench_start`] and [`bench_stop`], which the instruction-counting QEMU plugin
 //!    of `scripts/firmware-costs.sh` watches;
-//! 4. the stack high-water marks (`STACK`), from a painted stack.
+//! 4. the stack high-water marks (`STACK`), from a painted stack;
+//! 5. the friction monitor's frames on its rig (`MBEGIN`/`MALARM`/`MSUM`/`MMAP`/`MEND`), also
+//!    compared with the host, and its RAM (`RAM monitor`).
 //!
 //! Exit code 0 when everything ran, 1 if a section failed to start.
 #![no_std]
@@ -23,6 +25,8 @@ use crane_model::{dynamics, Config, Crane, Law, Mode, Params, Real, MAX_SEGMENTS
 use crane_twin::board::SimBus;
 use crane_twin::logic::control::{Controller, LoopConfig, DEMO, F64_SEGMENT_BUDGET};
 use crane_twin::logic::fastmath::F32x;
+use crane_twin::logic::monitor::Monitor;
+use crane_twin::logic::monitor_rig::{check_periods, run_check, Event};
 use crane_twin::logic::plant::{demo_init, demo_plant, demo_twin_init, run_demo_with};
 use crane_twin::logic::scenarios::{run, InputGen, Scenario, SCENARIOS};
 #[cfg(feature = "probe")]
@@ -312,6 +316,21 @@ fn bench_period_latched<R: Real>(tag: &str, cfg: &LoopConfig, periods: u32, out:
     true
 }
 
+/// The monitor's rig (`MBEGIN`..`MEND`, compared with the host), each monitor update
+/// bracketed by the bench markers (`BENCH monitor_<tag> n`).
+fn monitor_check<R: Real>(tag: &str, out: &mut Out) -> bool {
+    let _ = writeln!(out, "BENCH monitor_{tag} {}", check_periods());
+    let mut frames = Out::new();
+    matches!(
+        run_check::<R, _, _>(tag, &mut frames, |e| match e {
+            Event::MonitorStart => bench_start(),
+            Event::MonitorEnd => bench_stop(),
+            Event::Alarm(..) | Event::Pass(_) => {}
+        }),
+        Ok(true)
+    )
+}
+
 #[entry]
 fn main() -> ! {
     let mut out = Out::new();
@@ -336,6 +355,16 @@ fn main() -> ! {
     let w = paint_stack();
     ok &= closed_loop::<F32x>("f32x", &default, &mut out);
     let _ = writeln!(out, "STACK loop_f32x {}", stack_used(w));
+
+    // The friction monitor on its rig: frames compared with the host's, and the cost of
+    // each monitor update (between the bench markers).
+    let _ = writeln!(out, "RAM monitor {}", Monitor::RAM_BYTES);
+    let w = paint_stack();
+    ok &= monitor_check::<f64>("f64", &mut out);
+    let _ = writeln!(out, "STACK monitor_f64 {}", stack_used(w));
+    let w = paint_stack();
+    ok &= monitor_check::<F32x>("f32x", &mut out);
+    let _ = writeln!(out, "STACK monitor_f32x {}", stack_used(w));
 
     let w = paint_stack();
     ok &= bench_period::<f64>("f64", &f64_loop(), 4000, &mut out);

@@ -6,8 +6,8 @@
 //! Cortex-M4F `mps2-an386`) prints the digests through semihosting; this test regenerates them
 //! on the host and compares the text: the exact bits of all ten state components and the modes
 //! every few steps, and an FNV-1a hash over every step's bits, for f64, f32 and `F32x` (f32
-//! with FPU-only sine/cosine), and for the
-//! closed loop (twin state and command bits every period).
+//! with FPU-only sine/cosine), for the closed loop (twin state and command bits every
+//! period), and the friction monitor's frames on its rig (alarms and maps, `MBEGIN`..`MEND`).
 //!
 //! Run by `scripts/test.sh` after `cargo build -p firmware --target thumbv7em-none-eabihf
 //! --release`; `FIRMWARE_ELF` overrides the ELF's path.
@@ -22,6 +22,7 @@ mod logic;
 use host_tests::qemu::{self, QemuRun};
 use logic::control::{LoopConfig, F64_SEGMENT_BUDGET};
 use logic::fastmath::F32x;
+use logic::monitor_rig::run_check;
 use logic::plant::{demo_plant, run_demo, run_demo_with};
 use logic::scenarios::{run, SCENARIOS};
 use std::path::PathBuf;
@@ -47,13 +48,17 @@ fn host_digest() -> String {
     run_demo::<f32, _, _>(&mut plant, "f32", &mut out).expect("format");
     let mut plant = demo_plant().expect("demo plant");
     run_demo::<F32x, _, _>(&mut plant, "f32x", &mut out).expect("format");
+    // The friction monitor's frames on its rig.
+    run_check::<f64, _, _>("f64", &mut out, |_| {}).expect("format");
+    run_check::<F32x, _, _>("f32x", &mut out, |_| {}).expect("format");
     out
 }
 
 /// The digest lines of a firmware transcript (its other lines are costs and stack figures).
 fn digest_lines(text: &str) -> Vec<&str> {
-    const KEEP: [&str; 8] = [
-        "BEGIN ", "S ", "END ", "ERROR ", "LBEGIN ", "L ", "LEND ", "LSTAT ",
+    const KEEP: [&str; 13] = [
+        "BEGIN ", "S ", "END ", "ERROR ", "LBEGIN ", "L ", "LEND ", "LSTAT ", "MBEGIN ", "MALARM ",
+        "MSUM ", "MMAP ", "MEND ",
     ];
     text.lines()
         .filter(|l| KEEP.iter().any(|k| l.starts_with(k)))
@@ -140,9 +145,16 @@ fn firmware_under_qemu_matches_host_bit_for_bit() {
         "every scenario in f64, f32, f32x"
     );
     assert_eq!(a.iter().filter(|l| l.starts_with("LEND ")).count(), 3);
+    // The monitor's sections (f64 and F32x), each with the bump raised where it is.
+    assert_eq!(a.iter().filter(|l| l.starts_with("MEND ")).count(), 2);
+    let bumps = a
+        .iter()
+        .filter(|l| l.starts_with("MALARM ") && l.contains("kind=local_friction axis=X"))
+        .count();
+    assert_eq!(bumps, 2, "the bump, in f64 and in F32x");
     // the painted stack's high-water marks, each section within the budget
     let stack = stack_figures(&fw);
-    assert_eq!(stack.len(), 8, "STACK lines: {stack:?}");
+    assert_eq!(stack.len(), 10, "STACK lines: {stack:?}");
     for (section, bytes) in stack {
         assert!(
             bytes <= FIRMWARE_STACK_BUDGET,

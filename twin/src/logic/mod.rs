@@ -15,6 +15,7 @@ pub mod fastmath;
 pub mod feedforward;
 pub mod io;
 pub mod monitor;
+pub mod monitor_rig;
 pub mod observer;
 pub mod plant;
 pub mod prng;

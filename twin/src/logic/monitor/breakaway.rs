@@ -15,7 +15,8 @@
 //! then an exponentially forgetting current ratio (weight [`RECENT`]). Memory: 56 bytes per
 //! axis.
 
-/// Restarts over which commissioning learns the ratio's mean and scatter before it is judged.
+/// Restarts over which commissioning learns the ratio's mean and scatter before it is judged
+/// (the default of [`super::Settings::restarts_learn`]).
 pub const WARM: u16 = 32;
 /// Weight of a restart in the current ratio (about the last eight restarts).
 pub const RECENT: f32 = 0.125;
@@ -87,13 +88,14 @@ impl BreakawayWatch {
     }
 
     /// Records a breakaway ratio for direction `dir`. `learn`: commissioning, or no stiction
-    /// alarm stands (the learned statistics follow slowly); otherwise they are frozen.
-    pub fn record(&mut self, dir: usize, ratio: f32, learn: bool) {
+    /// alarm stands (the learned statistics follow slowly); otherwise they are frozen. The
+    /// first `warm` restarts are the commissioning average (weight `1/n`).
+    pub fn record(&mut self, dir: usize, ratio: f32, learn: bool, warm: u16) {
         if dir > 1 || !ratio.is_finite() {
             return;
         }
         let n = self.n[dir];
-        if n >= WARM {
+        if n >= warm {
             self.current[dir] += RECENT * (ratio - self.current[dir]);
             self.fresh[dir] = true;
         }
@@ -106,7 +108,7 @@ impl BreakawayWatch {
             self.mean[dir] += w * d;
             // Variance per restart (West's weighted update).
             self.var[dir] = (1.0 - w) * (self.var[dir] + w * d * d);
-            if n <= WARM {
+            if n <= warm {
                 self.current[dir] = self.mean[dir];
             }
         }
@@ -121,10 +123,10 @@ impl BreakawayWatch {
     }
 
     /// Learned mean ratio, its variance per restart, and the current ratio of direction
-    /// `dir`; `None` until [`WARM`] restarts were seen.
-    pub fn stats(&self, dir: usize) -> Option<(f32, f32, f32)> {
+    /// `dir`; `None` until `warm` restarts were seen.
+    pub fn stats(&self, dir: usize, warm: u16) -> Option<(f32, f32, f32)> {
         let n = *self.n.get(dir)?;
-        if n < WARM {
+        if n < warm {
             return None;
         }
         Some((self.mean[dir], self.var[dir], self.current[dir]))
@@ -160,15 +162,15 @@ mod tests {
     fn commissioning_learns_then_the_current_ratio_follows() {
         let mut w = BreakawayWatch::default();
         for i in 0..WARM {
-            w.record(1, if i % 2 == 0 { 1.1 } else { 1.3 }, true);
+            w.record(1, if i % 2 == 0 { 1.1 } else { 1.3 }, true, WARM);
         }
-        let (mean, var, cur) = w.stats(1).unwrap_or_default();
+        let (mean, var, cur) = w.stats(1, WARM).unwrap_or_default();
         assert!((mean - 1.2).abs() < 1e-5 && (cur - 1.2).abs() < 1e-5);
         assert!((var - 0.01).abs() < 1e-4, "{var}");
         for _ in 0..24 {
-            w.record(1, 2.0, false);
+            w.record(1, 2.0, false, WARM);
         }
-        let (mean, _, cur) = w.stats(1).unwrap_or_default();
+        let (mean, _, cur) = w.stats(1, WARM).unwrap_or_default();
         assert!(cur > 1.9, "{cur}");
         assert!((mean - 1.2).abs() < 1e-5, "frozen while an alarm stands");
         assert!(w.take_fresh(1) && !w.take_fresh(1));

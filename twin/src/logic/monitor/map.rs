@@ -115,6 +115,11 @@ impl SlidingMap {
         }
     }
 
+    /// The travel `[lo, hi]` [m] the bins cover.
+    pub fn travel(&self) -> (f32, f32) {
+        (self.lo, self.lo + BINS as f32 * self.bin_width())
+    }
+
     /// Bin of position `x` [m], clamped to the travel.
     pub fn bin(&self, x: f32) -> usize {
         let b = (x - self.lo) * self.scale;

@@ -29,6 +29,7 @@
 
 pub mod alarm;
 pub mod breakaway;
+pub mod frame;
 pub mod map;
 
 use super::control::LoopConfig;
@@ -79,6 +80,10 @@ pub struct Settings {
     pub band: [f32; N],
     /// Most bins out of band that still make a local change (more is a travel-wide one).
     pub local_bins: usize,
+    /// Moves of a map over which the travel level's band is learned before it is judged.
+    pub level_learn: u32,
+    /// Restarts per direction over which the breakaway ratio is learned before it is judged.
+    pub restarts_learn: u16,
 }
 
 impl Settings {
@@ -114,6 +119,29 @@ impl Settings {
                 cfg.gains.stick_band[1] as f32,
             ],
             local_bins: 4,
+            level_learn: 16,
+            restarts_learn: breakaway::WARM,
+        }
+    }
+}
+
+impl Settings {
+    /// A short commissioning for the QEMU cross-check: 20 s, bins judged from 48 samples, the
+    /// travel level from 3 moves, the breakaway from 4 restarts. It trades the statistics'
+    /// quality for a run short enough to simulate under QEMU; it is not for a rig.
+    pub fn quick(cfg: &LoopConfig) -> Self {
+        let per = if cfg.period > 0.0 { cfg.period } else { 2e-3 };
+        let s = Settings::for_loop(cfg);
+        Settings {
+            map: MapSettings {
+                warm: 16,
+                judged: 48,
+                ..s.map
+            },
+            commissioning: (20.0 / per) as u64,
+            level_learn: 3,
+            restarts_learn: 4,
+            ..s
         }
     }
 }
@@ -171,8 +199,6 @@ struct Checks {
 /// check: a bin not crossed for longer is stale evidence while the travel changes slowly.
 const FRESH_MOVES: u16 = 8;
 
-/// Moves over which the level's band is learned before it is judged.
-const LEVEL_LEARN: u32 = 16;
 /// Weight of a move's level in its band once learned: about 256 moves.
 const LEVEL_SLOW: f32 = 1.0 / 256.0;
 /// Judged bins a move must cross to give a level (a median of fewer is no travel level: a
@@ -408,7 +434,7 @@ impl Monitor {
         let sliding = model + seen;
         if sliding > 0.25 * model && sliding > 0.0 {
             let learn = learning || !self.checks[i][dj].stiction.standing();
-            self.breakaway[i].record(dj, push / sliding, learn);
+            self.breakaway[i].record(dj, push / sliding, learn, self.settings.restarts_learn);
         }
     }
 
@@ -488,7 +514,7 @@ impl Monitor {
     /// median change of the judged bins it crossed (a rough spot moves a few bins, not the
     /// median; bins the move did not cross are not stale evidence). Moves over fewer than
     /// [`MOVE_BINS`] judged bins give no level. The level's band is its variance over moves,
-    /// learned over [`LEVEL_LEARN`] moves, then tracked slowly by the levels inside it while
+    /// learned over [`Settings::level_learn`] moves, then tracked slowly by the levels inside it while
     /// no alarm of the map stands. Also refreshes the pooled band (mean band of the judged bins).
     fn move_done(&mut self, i: usize, dj: usize, learning: bool) {
         let s = self.settings.map;
@@ -523,7 +549,7 @@ impl Monitor {
         let level = median(&mut devs[..crossed]);
         c.level = level;
         let standing = c.drift.standing() || c.local.standing();
-        let learned = c.level_n >= LEVEL_LEARN;
+        let learned = c.level_n >= self.settings.level_learn;
         let inside = level * level <= k2 * c.level_band;
         if !learned || (!standing && inside) {
             c.level_n = c.level_n.saturating_add(1);
@@ -611,7 +637,7 @@ impl Monitor {
         if !self.breakaway[i].take_fresh(dj) {
             return None;
         }
-        let (mean, var, cur) = self.breakaway[i].stats(dj)?;
+        let (mean, var, cur) = self.breakaway[i].stats(dj, self.settings.restarts_learn)?;
         let band = var * breakaway::RECENT / (2.0 - breakaway::RECENT);
         let e = cur - mean;
         self.checks[i][dj]
