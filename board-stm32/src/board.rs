@@ -28,6 +28,8 @@ use crane_model::Params;
 use crane_twin::hal::{DriveSet, HBridge};
 use crane_twin::logic::control::{Controller, Io, IoError, LoopConfig, DEMO};
 use crane_twin::logic::fastmath::F32x;
+use crane_twin::logic::monitor::frame::{write_alarm, write_maps};
+use crane_twin::logic::monitor::{Monitor, Settings};
 use crane_twin::logic::plant::demo_twin_init;
 use crane_twin::logic::safety::{extend_count, Cause, State, Supervisor};
 use crane_twin::preload::ZeroNowChannel;
@@ -110,6 +112,9 @@ impl Io for BoardIo<'_> {
         guard::at_tick(&mut self.sup, regs::safety_port(), missed);
     }
 }
+
+/// Periods between two map summaries of the friction monitor on the log (a minute at 2 ms).
+const MAPS_EVERY: u32 = 30_000;
 
 /// Sets up the timers and pins and runs the `F32x` twin along the demonstration trajectory
 /// once the supervisor is armed. Never returns while the loop runs.
@@ -206,12 +211,27 @@ pub fn run<W: Write>(p: Parts<'_, W>) -> i32 {
     let Ok(mut ctrl) = Controller::<F32x>::new(&Params::default(), demo_twin_init(), &cfg) else {
         return 2;
     };
+    // The friction monitor: alarms as frames on the log, and to the supervisor (which only
+    // reports them unless set to derate); the maps once a minute.
+    // (in a static: 6.8 KiB off the stack)
+    let Some(monitor) = cortex_m::singleton!(
+        : Monitor = Monitor::for_params(&Params::default(), Settings::for_loop(&cfg))
+    ) else {
+        return 2;
+    };
     let mut k: u32 = 0;
     // the stack's high-water mark, 256 words (about 11 us) a period
     let mut stack_use = stack::HighWater::new(stack::Layout::linked());
     loop {
         let t = f64::from(k) * cfg.period;
-        let _ = ctrl.run_period(&mut io, &DEMO.at::<F32x>(t));
+        let p = ctrl.run_period(&mut io, &DEMO.at::<F32x>(t));
+        if let Some(a) = monitor.update(ctrl.observer(), p.predicted) {
+            io.sup.alarm();
+            let _ = write_alarm(log, &a);
+        }
+        if k % MAPS_EVERY == MAPS_EVERY - 1 {
+            let _ = write_maps(log, monitor);
+        }
         let stack = stack_use.step(256);
         if k % 500 == 0 {
             let (ticks, overruns) = crate::tick_counts();

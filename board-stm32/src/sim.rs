@@ -35,11 +35,13 @@ use board_stm32::watchdog::{ResetCause, RCC_CSR_IWDGRSTF};
 use core::cell::RefCell;
 use core::fmt::Write;
 use cortex_m_semihosting::debug;
+use crane_model::Params;
 use crane_model::State as CraneState;
 use crane_twin::logic::control::{Io, IoError, LoopConfig};
 use crane_twin::logic::fastmath::F32x;
 use crane_twin::logic::io::pwm_command;
-use crane_twin::logic::plant::{demo_plant, run_demo_with, SimPlant};
+use crane_twin::logic::monitor::{Monitor, Settings};
+use crane_twin::logic::plant::{demo_plant, run_demo_monitored, SimPlant};
 use crane_twin::logic::safety::{Cause, State, Supervisor};
 use crane_twin::preload::ZeroNowChannel;
 use embedded_hal::pwm::SetDutyCycle;
@@ -225,7 +227,13 @@ pub fn run<W: Write>(_rcc: &mut Rcc, csr: u32, log: &mut Log<W>) -> i32 {
         return 5;
     }
     let cfg = LoopConfig::default();
-    let res = run_demo_with::<F32x, _, _>(&mut io, &cfg, "f32x", log);
+    // The friction monitor in a static (6.8 KiB off the stack), quick commissioning.
+    let Some(monitor) = cortex_m::singleton!(
+        : Monitor = Monitor::for_params(&Params::default(), Settings::quick(&cfg))
+    ) else {
+        return 2;
+    };
+    let res = run_demo_monitored::<F32x, _, _>(&mut io, &cfg, monitor, "f32x", log);
     let (ticks, overruns) = tick_counts();
     let _ = writeln!(
         log,

@@ -23,9 +23,12 @@
 #[path = "../../twin/src/logic/mod.rs"]
 mod logic;
 
+use crane_model::Params;
 use host_tests::qemu::{self, QemuRun};
+use logic::control::LoopConfig;
 use logic::fastmath::F32x;
-use logic::plant::{demo_plant, run_demo};
+use logic::monitor::{Monitor, Settings};
+use logic::plant::{demo_plant, run_demo_monitored};
 use std::path::PathBuf;
 use std::process::{Command, ExitStatus};
 use std::time::Duration;
@@ -106,16 +109,21 @@ fn run_board(arg: &str) -> (ExitStatus, String) {
 fn host_loop() -> String {
     let mut plant = demo_plant().expect("demo plant");
     let mut out = String::new();
-    run_demo::<F32x, _, _>(&mut plant, "f32x", &mut out).expect("format");
+    let cfg = LoopConfig::default();
+    let mut monitor = Monitor::for_params(&Params::default(), Settings::quick(&cfg));
+    run_demo_monitored::<F32x, _, _>(&mut plant, &cfg, &mut monitor, "f32x", &mut out)
+        .expect("format");
     out
 }
 
 fn loop_lines(text: &str) -> Vec<&str> {
     text.lines()
         .filter(|l| {
-            ["LBEGIN ", "L ", "LEND ", "LSTAT "]
-                .iter()
-                .any(|k| l.starts_with(k))
+            [
+                "LBEGIN ", "L ", "LEND ", "LSTAT ", "MALARM ", "MSUM ", "MMAP ",
+            ]
+            .iter()
+            .any(|k| l.starts_with(k))
         })
         .collect()
 }
@@ -160,6 +168,8 @@ fn stm32_trajectory_matches_host_and_a_forced_panic_zeroes_the_pwm() {
         assert_eq!(f, h, "line {i} differs (board left, host right)");
     }
     assert_eq!(a.iter().filter(|l| l.starts_with("L ")).count(), 16);
+    // the friction monitor ran in the board's period: its map frames (4 maps) match too
+    assert_eq!(a.iter().filter(|l| l.starts_with("MSUM ")).count(), 4);
     // 2. the timer interrupt drove every period, none overran (deterministic under icount)
     assert_eq!(field(&fw, "TICKS ", "periods"), "4000");
     assert_eq!(field(&fw, "TICKS ", "ticks"), "4000");

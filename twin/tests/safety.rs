@@ -2,7 +2,7 @@
 //! (`crane_twin::logic::safety`), each path on its own.
 
 use crane_twin::logic::safety::{
-    extend_count, Cause, Inputs, State, Supervisor, TickLatch, SAFE_OUTPUTS,
+    extend_count, Cause, Inputs, OnAlarm, State, Supervisor, TickLatch, SAFE_OUTPUTS,
 };
 
 fn armed() -> Supervisor {
@@ -207,4 +207,28 @@ fn the_loop_feeds_the_watchdog_only_while_it_keeps_its_period() {
     let mut w = Supervisor::new();
     w.trip(Cause::WatchdogReset);
     assert!(w.feeds_watchdog());
+}
+
+#[test]
+fn a_monitor_alarm_is_only_reported_by_default() {
+    let mut s = armed();
+    assert!(!s.alarm());
+    assert_eq!(s.outputs([12.0, -12.0, 3.0]).volts, [12.0, -12.0, 3.0]);
+}
+
+#[test]
+fn derating_limits_every_command_until_acknowledged_and_never_lifts_the_safe_state() {
+    let on = OnAlarm::derate(50).unwrap_or_default();
+    assert_eq!(on, OnAlarm::Derate { percent: 50 });
+    assert_eq!(OnAlarm::derate(0), None);
+    assert_eq!(OnAlarm::derate(100), None);
+    let mut s = armed().with_on_alarm(on);
+    assert_eq!(s.outputs([12.0, -12.0, 3.0]).volts, [12.0, -12.0, 3.0]);
+    assert!(s.alarm());
+    assert_eq!(s.outputs([12.0, -12.0, 3.0]).volts, [6.0, -6.0, 3.0]);
+    assert!(s.outputs([f64::NAN; 3]).volts.iter().all(|v| v.is_nan()));
+    s.trip(Cause::EStop);
+    assert_eq!(s.outputs([12.0; 3]), SAFE_OUTPUTS);
+    s.acknowledge();
+    assert!(!s.derated());
 }

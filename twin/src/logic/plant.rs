@@ -4,9 +4,12 @@
 //! [`SimPlant`] implements [`Io`] directly; the embedded-hal board in `crate::board` wraps the
 //! same plant behind the driver and encoder traits and gives the same bits.
 
-use super::control::{Controller, Io, IoError, LoopConfig, Trajectory};
+use super::control::{Controller, Io, IoError, LoopConfig, Period, Trajectory};
 use super::digest::{write_state, Fnv};
 use super::io::{pwm_command, pwm_volts, Channel, EncoderScale, Pwm};
+use super::monitor::alarm::Alarm;
+use super::monitor::frame::{write_alarm, write_maps};
+use super::monitor::Monitor;
 use super::observer::Counters;
 use core::fmt::Write;
 use crane_model::{Config, Crane, Error, Extensions, Params, Real, State};
@@ -174,6 +177,35 @@ pub fn run_loop<R: Real, I: Io, W: Write>(
     tag: &str,
     out: &mut W,
 ) -> Result<LoopSummary, core::fmt::Error> {
+    let mut no_monitor = |_: &Controller<R>, _: &Period<R>| None;
+    run_loop_with(
+        ctrl,
+        io,
+        cfg,
+        traj,
+        (periods, every),
+        tag,
+        out,
+        &mut no_monitor,
+    )
+}
+
+/// What [`run_loop_with`] calls every period after the controller: the friction monitor.
+pub type Watch<'a, R> = dyn FnMut(&Controller<R>, &Period<R>) -> Option<Alarm> + 'a;
+
+/// [`run_loop`] with `watch` called every period after the controller's (the friction
+/// monitor): an alarm it returns is written as an `MALARM` frame.
+#[allow(clippy::too_many_arguments)]
+pub fn run_loop_with<R: Real, I: Io, W: Write>(
+    ctrl: &mut Controller<R>,
+    io: &mut I,
+    cfg: &LoopConfig,
+    traj: &Trajectory<'_>,
+    (periods, every): (u32, u32),
+    tag: &str,
+    out: &mut W,
+    watch: &mut Watch<'_, R>,
+) -> Result<LoopSummary, core::fmt::Error> {
     writeln!(out, "LBEGIN {tag} periods={periods}")?;
     let mut fnv = Fnv::default();
     let mut sum = LoopSummary::default();
@@ -185,6 +217,9 @@ pub fn run_loop<R: Real, I: Io, W: Write>(
         let t = f64::from(k) * cfg.period;
         let r = traj.at::<R>(t);
         let p = ctrl.run_period(io, &r);
+        if let Some(a) = watch(ctrl, &p) {
+            write_alarm(out, &a)?;
+        }
         let est = ctrl.observer().state();
         let modes = ctrl.observer().modes();
         fnv.step(&est, &modes, u8::from(p.update.is_err()));
@@ -337,4 +372,34 @@ pub fn run_demo_with<R: Real, I: Io, W: Write>(
         out,
     )
     .map(Some)
+}
+
+/// [`run_demo_with`] with the friction monitor `monitor` in the loop (build it with
+/// [`Monitor::for_params`] of the default parameters; the board keeps it in a static, off the
+/// stack). With [`Settings::quick`] the 8-s demonstration is all commissioning, so no alarm
+/// can come: the monitor's cost and its map frames, written after `LEND`, are what this shows.
+pub fn run_demo_monitored<R: Real, I: Io, W: Write>(
+    io: &mut I,
+    cfg: &LoopConfig,
+    monitor: &mut Monitor,
+    tag: &str,
+    out: &mut W,
+) -> Result<Option<LoopSummary>, core::fmt::Error> {
+    let Ok(mut ctrl) = Controller::<R>::new(&Params::default(), demo_twin_init(), cfg) else {
+        writeln!(out, "ERROR {tag} controller")?;
+        return Ok(None);
+    };
+    let mut watch = |c: &Controller<R>, p: &Period<R>| monitor.update(c.observer(), p.predicted);
+    let sum = run_loop_with(
+        &mut ctrl,
+        io,
+        cfg,
+        &super::control::DEMO,
+        (DEMO_PERIODS, DEMO_EVERY),
+        tag,
+        out,
+        &mut watch,
+    )?;
+    write_maps(out, monitor)?;
+    Ok(Some(sum))
 }

@@ -12,6 +12,8 @@
 //!   per 2 ms) and the loop ([`TickLatch::take`]), counting overruns (a tick that arrives while
 //!   the previous one has not been taken). `u64` counters: they never wrap.
 //! - [`extend_count`]: a 16-bit hardware encoder counter extended to `i32`.
+//! - [`OnAlarm`]: what the supervisor does when the friction monitor raises an alarm: report
+//!   only (the default), or derate the drives until the operator acknowledges.
 
 /// Why the supervisor is in the safe state (the first cause; later ones do not replace it).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -103,10 +105,37 @@ pub const SAFE_OUTPUTS: Outputs = Outputs {
     brake_release: false,
 };
 
+/// What the supervisor does when the friction monitor raises an alarm (a setting).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum OnAlarm {
+    /// The alarm is reported (its frame on the log) and the drives run on unchanged.
+    #[default]
+    ReportOnly,
+    /// From the alarm on, every commanded voltage is limited to `percent` % of the supply
+    /// (a slower, weaker crane on a worn part) until [`Supervisor::acknowledge`].
+    Derate {
+        /// Share of the supply voltage still allowed, 1..=99 (see [`OnAlarm::derate`]).
+        percent: u8,
+    },
+}
+
+impl OnAlarm {
+    /// Derating to `percent` % of the supply; `None` outside 1..=99 (0 would stop the crane:
+    /// that is the safe state's job; 100 would change nothing).
+    pub fn derate(percent: u8) -> Option<Self> {
+        (1..=99)
+            .contains(&percent)
+            .then_some(OnAlarm::Derate { percent })
+    }
+}
+
 /// The latching safety state machine.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Supervisor {
     state: State,
+    on_alarm: OnAlarm,
+    derated: bool,
 }
 
 impl Default for Supervisor {
@@ -124,7 +153,35 @@ impl Supervisor {
     pub const fn new() -> Self {
         Supervisor {
             state: State::Safe(Cause::PowerOn),
+            on_alarm: OnAlarm::ReportOnly,
+            derated: false,
         }
+    }
+
+    /// The same supervisor acting on monitor alarms as `on_alarm` says.
+    pub const fn with_on_alarm(mut self, on_alarm: OnAlarm) -> Self {
+        self.on_alarm = on_alarm;
+        self
+    }
+
+    /// The friction monitor raised an alarm: with [`OnAlarm::Derate`] the drives are derated
+    /// from now on (whatever the state; the safe state still drives 0 V). Returns whether the
+    /// outputs are derated.
+    pub fn alarm(&mut self) -> bool {
+        if let OnAlarm::Derate { .. } = self.on_alarm {
+            self.derated = true;
+        }
+        self.derated
+    }
+
+    /// The operator acknowledged the alarms: full voltage again.
+    pub fn acknowledge(&mut self) {
+        self.derated = false;
+    }
+
+    /// Whether the outputs are derated.
+    pub fn derated(&self) -> bool {
+        self.derated
     }
 
     /// Current state.
@@ -185,11 +242,26 @@ impl Supervisor {
         self.state != State::Safe(Cause::Overrun)
     }
 
-    /// What to drive for the loop's command `volts` [V] in the current state.
+    /// What to drive for the loop's command `volts` [V] in the current state (limited when
+    /// derated; a NaN stays NaN and the PWM layer switches it off).
     pub fn outputs(&self, volts: [f64; 3]) -> Outputs {
         match self.state {
             State::Run => Outputs {
-                volts,
+                volts: match (self.derated, self.on_alarm) {
+                    (true, OnAlarm::Derate { percent }) => {
+                        let limit = super::io::U_MAX * f64::from(percent) / 100.0;
+                        volts.map(|v| {
+                            if v > limit {
+                                limit
+                            } else if v < -limit {
+                                -limit
+                            } else {
+                                v
+                            }
+                        })
+                    }
+                    _ => volts,
+                },
                 driver_enable: true,
                 brake_release: true,
             },

@@ -287,6 +287,27 @@ impl Monitor {
         }
     }
 
+    /// A monitor of a twin with parameters `params` (the same as [`Monitor::new`] for an
+    /// observer built with them): for a monitor placed in a static before the loop starts.
+    pub fn for_params(params: &crane_model::Params, settings: Settings) -> Self {
+        let axes = params.axes();
+        let map = |i: usize| {
+            let (lo, hi) = (axes[i].min as f32, axes[i].max as f32);
+            [SlidingMap::new(lo, hi), SlidingMap::new(lo, hi)]
+        };
+        Monitor {
+            settings,
+            maps: [map(0), map(1)],
+            checks: [[Checks::default(); 2]; N],
+            breakaway: [BreakawayWatch::default(); N],
+            residual: [ResidualWatch::default(); N],
+            sliding_for: [0; N],
+            last_dir: [None; N],
+            pending: [None; 4],
+            period: 0,
+        }
+    }
+
     /// The settings.
     pub fn settings(&self) -> &Settings {
         &self.settings
