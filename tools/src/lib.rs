@@ -17,6 +17,8 @@
 //! - [`study`]: the study itself (wall time and velocity RMSE per model and case, the largest
 //!   stable RK4 step, the hybrid step at equal accuracy) and the paper's table.
 //! - [`figures`]: the paper's two figures (SVG).
+//! - [`monitor`]: `crane monitor LOG`, the friction monitor's frames from a firmware log
+//!   decoded into a table, a JSON report and a plot.
 //! - [`montecarlo`]: many independent simulations over friction uncertainty on all cores.
 //! - [`output`]: where the command line writes: atomic writes that never replace an input or
 //!   a data set unless forced.
@@ -28,6 +30,7 @@ pub mod bdf;
 pub mod cases;
 pub mod error;
 pub mod figures;
+pub mod monitor;
 pub mod montecarlo;
 pub mod ode23s;
 pub mod ode45;

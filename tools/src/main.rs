@@ -35,6 +35,20 @@ fn within(lo: f64, hi: f64) -> impl Fn(&str) -> Result<f64> + Clone + Send + Syn
     }
 }
 
+/// The clap value parser of `crane monitor --period-s`: a control period [s] in
+/// `crane_tools::monitor::PERIOD_S_RANGE` (both ends included).
+fn period_s(s: &str) -> Result<f64> {
+    let (lo, hi) = crane_tools::monitor::PERIOD_S_RANGE;
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|e| anyhow::anyhow!("`{s}` is not a number ({e})"))?;
+    if !(v >= lo && v <= hi) {
+        anyhow::bail!("{v} s is outside the plausible range [{lo:e}, {hi}] s");
+    }
+    Ok(v)
+}
+
 /// Prints `value` as the command's one JSON document on stdout.
 fn emit<T: Serialize>(value: &T) -> Result<()> {
     out!("{}", serde_json::to_string_pretty(value)?);
@@ -217,6 +231,60 @@ enum Command {
         #[arg(long, value_name = "FILE", num_args = 0..=1)]
         json: Option<Option<PathBuf>>,
     },
+    /// Decode the friction monitor's frames (MALARM, MSUM, MMAP) in a firmware log: its alarms
+    /// and last friction maps as a table, a JSON report and a plot (SVG).
+    Monitor {
+        /// The UART / semihosting log (text; lines that are not monitor frames are ignored).
+        log: PathBuf,
+        /// Output directory: `DIR/monitor.json` and `DIR/monitor.svg` (unless `--json FILE`
+        /// or `--plot FILE` name them).
+        #[arg(long, value_name = "DIR")]
+        out: Option<PathBuf>,
+        /// The report (JSON): `--json` prints it on stdout instead of the table (as every
+        /// command's `--json`); `--json FILE` writes it to FILE.
+        #[arg(long, value_name = "FILE", num_args = 0..=1)]
+        json: Option<Option<PathBuf>>,
+        /// Plot (SVG) of the last friction maps of the log's last section against position.
+        #[arg(long, value_name = "FILE.svg")]
+        plot: Option<PathBuf>,
+        /// Control period of the firmware [s] (time = period index * T), in [1e-5, 1].
+        #[arg(long, value_name = "T", default_value_t = crane_tools::monitor::PERIOD_S,
+              value_parser = period_s)]
+        period_s: f64,
+    },
+}
+
+/// `crane monitor`: decodes the log, writes the report and the plot, prints the table (or
+/// the report with a bare `--json`).
+fn monitor(
+    log: PathBuf,
+    out: Option<PathBuf>,
+    json: Option<Option<PathBuf>>,
+    plot: Option<PathBuf>,
+    period_s: f64,
+) -> Result<()> {
+    use crane_tools::monitor::{self, Request};
+    let (stdout, json) = match json {
+        Some(Some(file)) => (false, Some(file)),
+        Some(None) => (true, None),
+        None => (false, None),
+    };
+    let req = Request {
+        log,
+        out,
+        json,
+        plot,
+        period_s,
+    };
+    let done = monitor::run(&req)?;
+    if stdout {
+        return emit(&done.report);
+    }
+    out!("{}", monitor::report::table(&done.report).trim_end());
+    for p in &done.written {
+        out!("wrote {}", p.display());
+    }
+    Ok(())
 }
 
 fn run(command: Command) -> Result<()> {
@@ -323,6 +391,13 @@ fn run(command: Command) -> Result<()> {
                 json,
             )?
         }
+        Command::Monitor {
+            log,
+            out,
+            json,
+            plot,
+            period_s,
+        } => monitor(log, out, json, plot, period_s)?,
     }
     Ok(())
 }
