@@ -41,6 +41,7 @@ use crane_twin::logic::control::{Io, IoError, LoopConfig};
 use crane_twin::logic::fastmath::F32x;
 use crane_twin::logic::io::pwm_command;
 use crane_twin::logic::monitor::{Monitor, Settings};
+use crane_twin::logic::monitor_rig::run_check;
 use crane_twin::logic::plant::{demo_plant, run_demo_monitored, SimPlant};
 use crane_twin::logic::safety::{Cause, State, Supervisor};
 use crane_twin::preload::ZeroNowChannel;
@@ -273,6 +274,11 @@ pub fn run<W: Write>(_rcc: &mut Rcc, csr: u32, log: &mut Log<W>) -> i32 {
             }
         }
         _ => {
+            // The friction monitor's rig with its fault (the firmware's `CHECK`): the alarm
+            // frames this CPU prints, compared with the host's.
+            if !matches!(run_check::<F32x, _, _>("f32x", log, |_| {}), Ok(true)) {
+                return 8;
+            }
             // The loop leaves a holding duty on the rope; a panic now must zero it.
             let (ccr, _) = regs::pwm_readback();
             let _ = writeln!(log, "FORCED PANIC");

@@ -28,6 +28,7 @@ use host_tests::qemu::{self, QemuRun};
 use logic::control::LoopConfig;
 use logic::fastmath::F32x;
 use logic::monitor::{Monitor, Settings};
+use logic::monitor_rig::run_check;
 use logic::plant::{demo_plant, run_demo_monitored};
 use std::path::PathBuf;
 use std::process::{Command, ExitStatus};
@@ -113,6 +114,7 @@ fn host_loop() -> String {
     let mut monitor = Monitor::for_params(&Params::default(), Settings::quick(&cfg));
     run_demo_monitored::<F32x, _, _>(&mut plant, &cfg, &mut monitor, "f32x", &mut out)
         .expect("format");
+    run_check::<F32x, _, _>("f32x", &mut out, |_| {}).expect("format");
     out
 }
 
@@ -120,7 +122,7 @@ fn loop_lines(text: &str) -> Vec<&str> {
     text.lines()
         .filter(|l| {
             [
-                "LBEGIN ", "L ", "LEND ", "LSTAT ", "MALARM ", "MSUM ", "MMAP ",
+                "LBEGIN ", "L ", "LEND ", "LSTAT ", "MBEGIN ", "MALARM ", "MSUM ", "MMAP ", "MEND ",
             ]
             .iter()
             .any(|k| l.starts_with(k))
@@ -168,8 +170,15 @@ fn stm32_trajectory_matches_host_and_a_forced_panic_zeroes_the_pwm() {
         assert_eq!(f, h, "line {i} differs (board left, host right)");
     }
     assert_eq!(a.iter().filter(|l| l.starts_with("L ")).count(), 16);
-    // the friction monitor ran in the board's period: its map frames (4 maps) match too
-    assert_eq!(a.iter().filter(|l| l.starts_with("MSUM ")).count(), 4);
+    // the friction monitor ran in the board's period (its 4 map frames match), then its rig
+    // with the bump: the same alarm as the host's, at the same period
+    assert!(a.iter().filter(|l| l.starts_with("MSUM ")).count() > 4);
+    assert_eq!(a.iter().filter(|l| l.starts_with("MEND f32x")).count(), 1);
+    assert!(
+        a.iter()
+            .any(|l| l.starts_with("MALARM ") && l.contains("kind=local_friction axis=X")),
+        "{fw}"
+    );
     // 2. the timer interrupt drove every period, none overran (deterministic under icount)
     assert_eq!(field(&fw, "TICKS ", "periods"), "4000");
     assert_eq!(field(&fw, "TICKS ", "ticks"), "4000");
