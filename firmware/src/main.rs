@@ -325,7 +325,7 @@ fn monitor_check<R: Real>(tag: &str, out: &mut Out) -> bool {
         run_check::<R, _, _>(tag, &mut frames, |e| match e {
             Event::MonitorStart => bench_start(),
             Event::MonitorEnd => bench_stop(),
-            Event::Alarm(..) | Event::Pass(_) => {}
+            Event::Alarm(..) | Event::Pass(_) | Event::Period { .. } => {}
         }),
         Ok(true)
     )

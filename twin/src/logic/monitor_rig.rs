@@ -68,6 +68,8 @@ pub struct Run {
     pub substeps: u32,
     /// Map frames every this many periods (0: only at the end).
     pub maps_every: u64,
+    /// Report every period ([`Event::Period`]): the recorded run.
+    pub record: bool,
 }
 
 /// What the rig reports besides the frames.
@@ -77,6 +79,17 @@ pub enum Event {
     Alarm(f64, Alarm),
     /// The true X position crossed the bump's centre at time `t` [s] (a pass).
     Pass(f64),
+    /// One period: time `t` [s], the voltages applied during it `u` [V], and the positions the
+    /// encoders read at its end `y` [m, m, m, rad, rad] (quantised, without the count noise):
+    /// a recorded run of the rig, as a crane data set would hold it.
+    Period {
+        /// Time at the period's start [s].
+        t: f64,
+        /// Voltages applied during the period [V].
+        u: [f64; 3],
+        /// Encoder positions at its end [m, m, m, rad, rad].
+        y: [f64; 5],
+    },
     /// The monitor's update of a period starts (a cost measurement brackets it).
     MonitorStart,
     /// The monitor's update of a period ended.
@@ -303,6 +316,7 @@ pub fn run<R: Real, W: Write, E: FnMut(Event)>(
         _ => None,
     };
     let slow = matches!(run.fault, Fault::SlowDrift { .. });
+    let record = run.record;
     let mut fnv = Fnv::default();
     let mut last_x = START[0];
     for k in 0..periods {
@@ -335,6 +349,16 @@ pub fn run<R: Real, W: Write, E: FnMut(Event)>(
             last_x = x;
         }
         io.wait();
+        if record {
+            let counts = io.plant.counts();
+            let scale = super::io::EncoderScale::RIG;
+            let y = super::io::Channel::ALL.map(|ch| scale.position(ch, counts[ch.index()]));
+            event(Event::Period {
+                t,
+                u: io.plant.volts(),
+                y,
+            });
+        }
     }
     write_maps(out, &monitor)?;
     writeln!(out, "MEND {tag} hash={:016x}", fnv.0)?;
@@ -380,6 +404,7 @@ pub const CHECK: Run = Run {
     reset_at: None,
     substeps: 1,
     maps_every: 7500,
+    record: false,
 };
 
 /// Runs [`CHECK`] with a twin in scalar type `R`, writing its frames under `tag`; `event`

@@ -59,12 +59,13 @@ pub fn run(run: &Run) -> Outcome {
         reset_at: run.reset_at,
         substeps: 2,
         maps_every: 0,
+        record: false,
     };
     let settings = Settings::for_loop(&LoopConfig::default());
     let _ = monitor_rig::run::<f64, _, _>(&rig, &settings, "host", &mut Sink, |e| match e {
         Event::Alarm(t, a) => out.alarms.push((t, a)),
         Event::Pass(t) => out.passes.push(t),
-        Event::MonitorStart | Event::MonitorEnd => {}
+        Event::MonitorStart | Event::MonitorEnd | Event::Period { .. } => {}
     });
     out
 }
