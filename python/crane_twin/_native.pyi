@@ -41,6 +41,9 @@ class Params:
 class Crane:
     """One simulator (hybrid or tanh friction, fixed step ``h`` [s])."""
 
+    def __copy__(self) -> "Crane": ...
+    def __deepcopy__(self, memo: object) -> "Crane": ...
+
     def __init__(
         self,
         params: ParamsLike = None,
@@ -74,6 +77,9 @@ class Crane:
 
 class CraneBatch:
     """Simulators stepped together in Rust (the vector environment's engine)."""
+
+    def __copy__(self) -> "CraneBatch": ...
+    def __deepcopy__(self, memo: object) -> "CraneBatch": ...
 
     def __init__(
         self,

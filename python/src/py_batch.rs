@@ -197,6 +197,20 @@ impl PyCraneBatch {
         Ok(PyCraneBatch { cranes, setups })
     }
 
+    /// An exact copy of every simulator (`copy.copy`, `copy.deepcopy`): both batches continue
+    /// bit for bit alike. Pickling is not offered.
+    fn __copy__(&self) -> Self {
+        PyCraneBatch {
+            cranes: self.cranes.clone(),
+            setups: self.setups.clone(),
+        }
+    }
+
+    /// See `__copy__` (a batch holds no Python object, so `memo` is not needed).
+    fn __deepcopy__(&self, _memo: &Bound<'_, PyAny>) -> Self {
+        self.__copy__()
+    }
+
     fn __len__(&self) -> usize {
         self.cranes.len()
     }

@@ -80,6 +80,20 @@ impl PyCrane {
         Ok(PyCrane { crane, setup })
     }
 
+    /// An exact copy: same parameters, state, modes, step count and input history, so both
+    /// continue bit for bit alike (`copy.copy`, `copy.deepcopy`). Pickling is not offered.
+    fn __copy__(&self) -> Self {
+        PyCrane {
+            crane: self.crane.clone(),
+            setup: self.setup.clone(),
+        }
+    }
+
+    /// See `__copy__` (a `Crane` holds no Python object, so `memo` is not needed).
+    fn __deepcopy__(&self, _memo: &Bound<'_, PyAny>) -> Self {
+        self.__copy__()
+    }
+
     /// One step of `h` with voltages `u = [u_x, u_y, u_l]` [V]; returns the new state.
     /// A rejected step (`StepError`) leaves the simulator unchanged.
     fn step<'py>(&mut self, py: Python<'py>, u: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
