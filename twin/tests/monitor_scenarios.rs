@@ -143,3 +143,17 @@ fn non_finite_voltages_and_an_unwatched_axis_change_nothing() {
         "friction_drift"
     ));
 }
+
+/// A heavier payload is not friction: the twin stops tracking the plant, which the monitor
+/// reports as `model_mismatch` (its friction maps are not judged while that stands).
+#[test]
+fn a_heavier_payload_is_a_model_mismatch_first() {
+    let fault = Fault::Payload { mass: 2.0 };
+    let o = run(fault, 700.0);
+    let first = o.alarms.iter().find(|(t, _)| *t >= ONSET);
+    assert!(
+        first.is_some_and(|(t, a)| rig::expected(&fault, a) && t - ONSET <= 30.0),
+        "{:?}",
+        o.alarms
+    );
+}

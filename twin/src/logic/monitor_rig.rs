@@ -48,6 +48,11 @@ pub enum Fault {
         /// Growth per hour (0.05 is 5 %).
         per_hour: f64,
     },
+    /// The payload becomes `mass` [kg] (a different load: not friction, a model mismatch).
+    Payload {
+        /// Payload mass [kg].
+        mass: f64,
+    },
 }
 
 /// One run of the rig.
@@ -135,6 +140,13 @@ fn faulted(base: &Params, run: &Run, t: f64) -> (Params, Extensions) {
     match run.fault {
         Fault::Clean => (*base, ext),
         Fault::DryFriction { factor } => (scale_dry(base, factor), ext),
+        Fault::Payload { mass } => (
+            Params {
+                payload_mass: mass,
+                ..*base
+            },
+            ext,
+        ),
         Fault::SlowDrift { per_hour } => (
             scale_dry(base, 1.0 + per_hour * (t - run.onset) / 3600.0),
             ext,

@@ -83,6 +83,7 @@ pub fn expected(fault: &Fault, a: &Alarm) -> bool {
             },
         ) => a.axis == Axis::X && (f64::from(position) - center).abs() <= 0.02 && change > 0.0,
         (Fault::Stiction { .. }, AlarmKind::StictionRise { .. }) => a.axis != Axis::Rope,
+        (Fault::Payload { .. }, AlarmKind::ModelMismatch { .. }) => true,
         _ => false,
     }
 }

@@ -218,6 +218,8 @@ fn median(v: &mut [f32]) -> f32 {
 /// The slow level of one axis' residual mean square.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct ResidualWatch {
+    /// The level is out of its band now (the twin does not track the plant).
+    out: bool,
     level: f32,
     mean: f32,
     var: f32,
@@ -512,7 +514,7 @@ impl Monitor {
     /// Evaluates the map of axis `i`, direction `dj` (round robin, after commissioning): a
     /// local pattern and the breakaway ratio.
     fn evaluate(&mut self, i: usize, dj: usize, learning: bool) {
-        if learning {
+        if learning || self.untracked(i) {
             return;
         }
         let local = self.local_check(i, dj);
@@ -520,6 +522,13 @@ impl Monitor {
         for (kind, direction) in [local, stiction].into_iter().flatten() {
             self.raise(i, kind, direction);
         }
+    }
+
+    /// Whether the twin does not track axis `i` now (its residual level out of band, or a
+    /// `model_mismatch` of the axis stands): its friction map then measures the model's error,
+    /// not the friction, and is not judged.
+    fn untracked(&self, i: usize) -> bool {
+        self.residual[i].out || self.residual[i].debounce.standing()
     }
 
     fn raise(&mut self, i: usize, kind: AlarmKind, direction: Direction) {
@@ -581,6 +590,10 @@ impl Monitor {
         if learning || !learned {
             return;
         }
+        if self.untracked(i) {
+            return;
+        }
+        let c = &mut self.checks[i][dj];
         if c.drift.feed(!inside) {
             self.raise(i, AlarmKind::FrictionDrift { change: level }, dir_of(dj));
         }
@@ -677,13 +690,14 @@ impl Monitor {
         let k2 = self.settings.k * self.settings.k;
         let explained = self.checks[i]
             .iter()
-            .any(|c| c.drift.standing() || c.local.standing() || c.local.pending());
+            .any(|c| c.drift.standing() || c.local.standing() || c.stiction.standing());
         let w = &mut self.residual[i];
         if w.n == 0 || w.var <= 0.0 {
             return;
         }
         let e = w.level - w.mean;
-        if w.debounce.feed(!explained && e > 0.0 && e * e > k2 * w.var) {
+        w.out = e > 0.0 && e * e > k2 * w.var;
+        if w.debounce.feed(!explained && w.out) {
             let alarm = Alarm {
                 kind: AlarmKind::ModelMismatch {
                     mean_square: w.level,
