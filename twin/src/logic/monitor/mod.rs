@@ -271,35 +271,23 @@ impl Monitor {
     /// `settings`.
     pub fn new<R: Real>(obs: &Observer<R>, settings: Settings) -> Self {
         let ax = &obs.twin().coeffs().axes;
-        let map = |i: usize| {
-            let lo = ax[i].min.to_f64() as f32;
-            let hi = ax[i].max.to_f64() as f32;
-            [SlidingMap::new(lo, hi), SlidingMap::new(lo, hi)]
-        };
-        Monitor {
-            settings,
-            maps: [map(0), map(1)],
-            checks: [[Checks::default(); 2]; N],
-            breakaway: [BreakawayWatch::default(); N],
-            residual: [ResidualWatch::default(); N],
-            sliding_for: [0; N],
-            last_dir: [None; N],
-            pending: [None; 4],
-            period: 0,
-        }
+        let travel = |i: usize| (ax[i].min.to_f64() as f32, ax[i].max.to_f64() as f32);
+        Self::with_travel([travel(0), travel(1)], settings)
     }
 
     /// A monitor of a twin with parameters `params` (the same as [`Monitor::new`] for an
     /// observer built with them): for a monitor placed in a static before the loop starts.
     pub fn for_params(params: &crane_model::Params, settings: Settings) -> Self {
         let axes = params.axes();
-        let map = |i: usize| {
-            let (lo, hi) = (axes[i].min as f32, axes[i].max as f32);
-            [SlidingMap::new(lo, hi), SlidingMap::new(lo, hi)]
-        };
+        let travel = |i: usize| (axes[i].min as f32, axes[i].max as f32);
+        Self::with_travel([travel(0), travel(1)], settings)
+    }
+
+    /// An empty monitor whose maps cover `travel` `(lo, hi)` [m] per watched axis.
+    fn with_travel(travel: [(f32, f32); N], settings: Settings) -> Self {
         Monitor {
             settings,
-            maps: [map(0), map(1)],
+            maps: travel.map(|(lo, hi)| [SlidingMap::new(lo, hi), SlidingMap::new(lo, hi)]),
             checks: [[Checks::default(); 2]; N],
             breakaway: [BreakawayWatch::default(); N],
             residual: [ResidualWatch::default(); N],
