@@ -302,12 +302,16 @@ fn drive_runs(
                 r.name
             )));
         }
+        // a position channel refreshed every few rows is rebuilt between its fresh samples
+        let refresh = crane_ident::data::timebase::held_channel(&a.x).map_or(1, |(r, _)| r);
+        let x = drive::prep::unhold(&a.x, refresh);
         let mk = |lo: usize, hi: usize, held_out: bool| drive::DriveRun {
             name: r.name.clone(),
             held_out,
             dt,
-            x: a.x[lo..hi].to_vec(),
+            x: x[lo..hi].to_vec(),
             u: a.force[lo..hi].to_vec(),
+            refresh,
         };
         match held {
             Some(h) => runs.push(mk(0, a.x.len(), h)),

@@ -30,11 +30,15 @@ pub enum Cause {
     /// A position-dependent restoring force: gravity on a joint, a spring, a cable
     /// (single-axis data).
     RestoringForce,
+    /// Dry friction that grows with the force the transmission carries (gearboxes, lead
+    /// and ball screws): every dry level plus `mu |F|` of the drive effort (single-axis
+    /// open-loop data).
+    LoadDependentFriction,
 }
 
 impl Cause {
     /// Every cause.
-    pub const ALL: [Cause; 9] = [
+    pub const ALL: [Cause; 10] = [
         Cause::LocalizedFriction,
         Cause::Stiction,
         Cause::DirectionAsymmetry,
@@ -44,6 +48,7 @@ impl Cause {
         Cause::InputSaturation,
         Cause::PayloadMass,
         Cause::RestoringForce,
+        Cause::LoadDependentFriction,
     ];
 
     /// The report name (`snake_case`).
@@ -58,6 +63,7 @@ impl Cause {
             Cause::InputSaturation => "input_saturation",
             Cause::PayloadMass => "payload_mass",
             Cause::RestoringForce => "restoring_force",
+            Cause::LoadDependentFriction => "load_dependent_friction",
         }
     }
 }
@@ -162,9 +168,12 @@ pub struct Finding {
     pub axis: String,
     /// Estimated parameters, SI.
     pub parameters: BTreeMap<String, f64>,
-    /// Held-out NMAE of the axis before the extension [%].
+    /// Held-out NMAE of the axis before the extension [%]; `null` when that simulation
+    /// diverged ([`nmae_or_diverged`]).
+    #[serde(with = "nmae_or_diverged")]
     pub nmae_before: f64,
-    /// Held-out NMAE of the axis after the extension [%].
+    /// Held-out NMAE of the axis after the extension [%]; `null` when diverged.
+    #[serde(with = "nmae_or_diverged")]
     pub nmae_after: f64,
     /// Evidence.
     pub evidence: Evidence,
@@ -175,9 +184,12 @@ pub struct Finding {
 pub struct AxisError {
     /// Axis name.
     pub axis: String,
-    /// NMAE on the fitting part [%].
+    /// NMAE on the fitting part [%]; `null` when the simulation diverged.
+    #[serde(with = "nmae_or_diverged")]
     pub nmae_fit: f64,
-    /// NMAE on the held-out part [%].
+    /// NMAE on the held-out part [%]; `null` when the simulation diverged
+    /// ([`nmae_or_diverged`]).
+    #[serde(with = "nmae_or_diverged")]
     pub nmae_held_out: f64,
     /// Noise level of the NMAE [%] (crane: encoder quantisation); below it nothing is claimed.
     pub nmae_noise: f64,
@@ -239,21 +251,58 @@ pub struct Report {
     pub final_model: Option<FinalModel>,
 }
 
+/// A position NMAE [%] that may stand for a diverged simulation: `f64::INFINITY` in memory,
+/// `null` in the JSON (with `diverged_*` flags beside it where a run is meant), "diverged" in
+/// text. A simulation that leaves the measured range tenfold (see
+/// `drive::score::DIVERGED_RANGES`) is never printed as a figure: a baseline drifting away
+/// once printed a held-out NMAE of 33,291,078 %.
+pub mod nmae_or_diverged {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    /// Serialises a finite value as a number, anything else as `null`.
+    pub fn serialize<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
+        if v.is_finite() {
+            s.serialize_f64(*v)
+        } else {
+            s.serialize_none()
+        }
+    }
+
+    /// Reads a number, or `null` as a diverged simulation (`f64::INFINITY`).
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+        Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::INFINITY))
+    }
+
+    /// `12.34 %` (with `digits` decimals), or `diverged`.
+    pub fn text(v: f64, digits: usize) -> String {
+        if v.is_finite() {
+            format!("{v:.digits$} %")
+        } else {
+            "diverged".to_string()
+        }
+    }
+}
+
 /// Held-out runs simulated from their recorded input (position NMAE: mean absolute error over
-/// the measured run's position range) [%].
+/// the measured run's position range) [%]. A mean over runs of which one diverged is `null`
+/// (diverged).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct HeldoutSimulation {
     /// Mean over held-out runs, baseline [%].
+    #[serde(with = "nmae_or_diverged")]
     pub nmae_before: f64,
     /// Mean over held-out runs, final model [%].
+    #[serde(with = "nmae_or_diverged")]
     pub nmae_after: f64,
     /// Mean over held-out runs of predicting no motion at all (the first position) [%].
     pub nmae_no_motion: f64,
     /// Mean over the held-out runs in which the axis moves (beyond pre-sliding), baseline [%]:
     /// the measure the causes are selected by (runs that stay at rest cannot tell friction
     /// models apart).
+    #[serde(with = "nmae_or_diverged")]
     pub moving_nmae_before: f64,
     /// Same, final model [%].
+    #[serde(with = "nmae_or_diverged")]
     pub moving_nmae_after: f64,
     /// Same, predicting no motion [%].
     pub moving_nmae_no_motion: f64,
@@ -266,14 +315,22 @@ pub struct HeldoutSimulation {
 pub struct RunSimulation {
     /// Run file.
     pub file: String,
-    /// Baseline [%].
+    /// Baseline [%]; `null` when its simulation diverged.
+    #[serde(with = "nmae_or_diverged")]
     pub nmae_before: f64,
-    /// Final model [%].
+    /// Final model [%]; `null` when its simulation diverged.
+    #[serde(with = "nmae_or_diverged")]
     pub nmae_after: f64,
     /// Predicting no motion [%].
     pub nmae_no_motion: f64,
     /// Whether the measured axis moves in this run (faster than the motion threshold).
     pub moves: bool,
+    /// The baseline's simulation diverged (left the measured range tenfold): no figure.
+    #[serde(default)]
+    pub diverged_before: bool,
+    /// The final model's simulation diverged: no figure.
+    #[serde(default)]
+    pub diverged_after: bool,
 }
 
 /// The final single-axis model, in SI units or, when the input gain is unknown, in input
@@ -307,8 +364,14 @@ pub struct FinalModel {
     pub offset: f64,
     /// Input dead band [input units].
     pub deadband: f64,
-    /// Input delay [samples].
+    /// Input delay [samples of the fitting runs' period].
     pub delay_samples: usize,
+    /// Input delay [s].
+    #[serde(default)]
+    pub delay_s: f64,
+    /// Load share `mu` [1]: every dry level grows by `mu |F|` of the drive effort; 0: none.
+    #[serde(default)]
+    pub load_friction: f64,
     /// Level at which the applied effort saturates, `clamp(u, -s, +s)` [force unit]; `null`
     /// when the model has no saturation.
     #[serde(default)]

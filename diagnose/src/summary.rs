@@ -1,5 +1,6 @@
 //! The report as the few lines a person reads first (the `crane diagnose` output).
 
+use crate::report::nmae_or_diverged::text as pct;
 use crate::Report;
 use std::fmt::Write;
 
@@ -13,32 +14,32 @@ impl Report {
         for f in &self.findings {
             let _ = writeln!(
                 s,
-                "  {} on {}: held-out NMAE {:.3} % -> {:.3} %, parameters {}",
+                "  {} on {}: held-out NMAE {} -> {}, parameters {}",
                 f.cause,
                 f.axis,
-                f.nmae_before,
-                f.nmae_after,
+                pct(f.nmae_before, 3),
+                pct(f.nmae_after, 3),
                 serde_json::to_string(&f.parameters).unwrap_or_default()
             );
         }
         if let Some(h) = &self.heldout_simulation {
             let _ = writeln!(
                 s,
-                "held-out runs simulated from the recorded input, position NMAE: baseline {:.2} %, final model {:.2} %, no motion {:.2} % (runs that move: {:.2} / {:.2} / {:.2} %)",
-                h.nmae_before,
-                h.nmae_after,
+                "held-out runs simulated from the recorded input, position NMAE: baseline {}, final model {}, no motion {:.2} % (runs that move: {} / {} / {:.2} %)",
+                pct(h.nmae_before, 2),
+                pct(h.nmae_after, 2),
                 h.nmae_no_motion,
-                h.moving_nmae_before,
-                h.moving_nmae_after,
+                pct(h.moving_nmae_before, 2),
+                pct(h.moving_nmae_after, 2),
                 h.moving_nmae_no_motion
             );
             for r in &h.runs {
                 let _ = writeln!(
                     s,
-                    "  {}: {:.2} % -> {:.2} % (no motion {:.2} %){}",
+                    "  {}: {} -> {} (no motion {:.2} %){}",
                     r.file,
-                    r.nmae_before,
-                    r.nmae_after,
+                    pct(r.nmae_before, 2),
+                    pct(r.nmae_after, 2),
                     r.nmae_no_motion,
                     if r.moves { "" } else { ", at rest" }
                 );

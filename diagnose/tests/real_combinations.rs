@@ -66,10 +66,23 @@ fn real_data_in_any_combination_never_panics() {
                 Ok(r) => {
                     reports += 1;
                     if let Some(h) = &r.heldout_simulation {
+                        // a figure, or a simulation that diverged and says so (issue 20:
+                        // never a diverged error printed as a figure)
+                        let before = h.runs.iter().any(|x| x.diverged_before);
+                        let after = h.runs.iter().any(|x| x.diverged_after);
                         assert!(
-                            h.nmae_before.is_finite() && h.nmae_after.is_finite(),
-                            "{name} case {case}"
+                            (h.nmae_before.is_finite()
+                                || (before && h.nmae_before == f64::INFINITY))
+                                && (h.nmae_after.is_finite()
+                                    || (after && h.nmae_after == f64::INFINITY)),
+                            "{name} case {case}: {} / {}",
+                            h.nmae_before,
+                            h.nmae_after
                         );
+                        for x in &h.runs {
+                            assert_eq!(x.diverged_before, !x.nmae_before.is_finite());
+                            assert_eq!(x.diverged_after, !x.nmae_after.is_finite());
+                        }
                     }
                     if let Some(m) = &r.final_model {
                         assert!(

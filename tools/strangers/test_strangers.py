@@ -5,8 +5,7 @@
 The sweep (generation + scoring of every case) runs when the crane binary exists; set
 STRANGERS_CASES=N to score only the first N cases (causes interleaved), STRANGERS_TIMEOUT=S
 for the per-case timeout (default 300 s; a timeout fails `test_every_case_ran`);
-STRANGERS_SWEEP=0 skips the sweep (CI, until the workbench passes its honesty checks on it:
-issue 20).
+STRANGERS_SWEEP=0 skips the sweep (the plant's own tests only).
 """
 
 from __future__ import annotations
@@ -26,9 +25,16 @@ import cases as C  # noqa: E402
 import plant as P  # noqa: E402
 import score as S  # noqa: E402
 
-# Per-cause accuracy floors (right / total) asserted on the sweep.
-# TODO: set from measurements (the measured "before" table is in README.md); 0 for now.
-FLOORS = {c: 0.0 for c in C.CAUSES}
+# Per-cause accuracy floors (right / total) asserted on the sweep: what `crane diagnose` of
+# main measured on 2026-11-27 (README.md, "after"), less one case per cause. The slack of one
+# case is for another machine's numpy rounding the last bit of a sample differently, which
+# can move a quantised sample by a count; a regression of two cases in one cause fails.
+MEASURED_RIGHT = {
+    "none": 10, "stiction": 1, "stribeck_friction": 0, "localized_friction": 0,
+    "input_deadzone": 2, "input_saturation": 6, "input_delay": 2, "restoring_force": 5,
+    "force_offset": 5, "direction_asymmetry": 4, "load_dependent_friction": 1,
+}
+FLOORS = {c: max(MEASURED_RIGHT[c] - 1, 0) / C.CAUSE_COUNTS[c] for c in C.CAUSES}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -270,7 +276,7 @@ def test_no_honesty_failure(sweep):
 def test_per_cause_floors(sweep):
     low = []
     for c, s in sweep["summary"]["per_cause"].items():
-        if s["right"] / s["total"] < FLOORS.get(c, 0.0):
+        if s["right"] / s["total"] < FLOORS.get(c, 0.0) - 1e-9:
             low.append((c, s["right"], s["total"], FLOORS[c]))
     assert not low, low
 

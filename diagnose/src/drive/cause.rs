@@ -3,7 +3,7 @@
 use crate::Cause;
 
 /// Every cause tried on single-axis open-loop data, in the order they are tried.
-pub const DRIVE_CAUSES: [Cause; 7] = [
+pub const DRIVE_CAUSES: [Cause; 8] = [
     Cause::RestoringForce,
     Cause::Stiction,
     Cause::DirectionAsymmetry,
@@ -11,4 +11,5 @@ pub const DRIVE_CAUSES: [Cause; 7] = [
     Cause::InputDeadzone,
     Cause::InputSaturation,
     Cause::InputDelay,
+    Cause::LoadDependentFriction,
 ];

@@ -78,6 +78,12 @@ pub struct Structure {
     /// Input saturation level [input units]: the effort applied is `clamp(u, -s, +s)`;
     /// `0`: no saturation (fixed, searched on a grid by the caller).
     pub saturation: f64,
+    /// Load-dependent dry friction `mu` [1]: every dry level plus `mu |F|` of the applied
+    /// effort; 0: none (fixed, searched on a grid by the caller). The least squares sees the
+    /// effort net of it, `F - mu sign(v) |F|`: as its own regressor `sign(v) |F|` is nearly
+    /// `F` itself while the drive pushes the motion, and the solve trades `mu` against the
+    /// inertia and friction (stranger rigs: `mu` 0.99, the inertia at its floor).
+    pub load: f64,
 }
 
 /// Something the estimator had to decide that the report must say.
@@ -264,8 +270,9 @@ pub fn estimate(
     for p in fit {
         for i in 0..p.run.x.len() {
             if p.v[i].abs() > th.v_slide {
+                let f = applied_input(&p.run.u, i, &s);
                 rows.push((
-                    applied_input(&p.run.u, i, &s),
+                    f - s.load * p.v[i].signum() * f.abs(),
                     p.a[i],
                     restoring_shape(motion, p.run.x[i], center),
                     p.v[i],
@@ -311,10 +318,11 @@ pub fn estimate(
     let mut kin_flags = Vec::new();
     let mut gaps: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
     for _pass in 0..2 {
+        // the force withstood at an onset, net of the position force and offset, and with
+        // load-dependent friction net of its load share (`F - mu |F|` is the dry level)
         let net = |p: &Prepared, i: usize| {
-            applied_input(&p.run.u, i, &s)
-                - ls.stiffness * restoring_shape(motion, p.run.x[i], center)
-                + ls.offset
+            let f = applied_input(&p.run.u, i, &s);
+            f - ls.stiffness * restoring_shape(motion, p.run.x[i], center) + ls.offset - s.load * f
         };
         first_motion = [Vec::new(), Vec::new()];
         let mut onsets: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
@@ -437,7 +445,7 @@ pub fn estimate(
         min: f64::NEG_INFINITY,
         max: f64::INFINITY,
         stribeck_velocity: 0.0,
-        load_friction: 0.0,
+        load_friction: s.load,
         local_friction: LocalFriction::None,
     };
     Ok(Estimate {
@@ -500,6 +508,7 @@ fn ls_pass(
     if s.offset && both {
         cols.push((Col::Offset, vec![1.0; rows.len()]));
     }
+
     let y: Vec<f64> = rows
         .iter()
         .map(|r| match fixed_kinetic {
@@ -540,6 +549,7 @@ fn ls_pass(
     }
     // the column of ones carries `-offset` (the offset is on the applied side)
     let offset = get(Col::Offset).map_or(0.0, |g| -g.0);
+
     let mut at_zero = |c: Col, name: Coefficient| -> f64 {
         match get(c) {
             Some((v, true)) => {

@@ -10,12 +10,16 @@
 //! 3. [`score`]: every structure is simulated from the recorded input with the hybrid
 //!    single-axis model (`crane_ident::simulate`) and scored by the position NMAE of the
 //!    held-out runs.
+//!    A simulation that leaves the measured range tenfold is "diverged", never a figure.
 //! 4. [`select`]: forward selection of the [`cause::DRIVE_CAUSES`]: a cause is kept when it cuts the
 //!    held-out simulated NMAE by at least [`select::MIN_GAIN`] and its parameters are physical.
+//!    The dead band, saturation and delay are searched on grids ([`grid`]); a value at a
+//!    grid's edge is never named.
 //! 5. [`plots`]: measured vs simulated runs, residuals, stick/slip marks, force vs velocity.
 
 pub mod cause;
 pub mod estimate;
+pub mod grid;
 pub mod plots;
 pub mod prep;
 pub mod refine;

@@ -23,6 +23,40 @@ pub struct DriveRun {
     pub x: Vec<f64>,
     /// Input [input units], applied over each sample (zero-order hold).
     pub u: Vec<f64>,
+    /// Rows per fresh sample of the position channel (1: every row is fresh; more when the
+    /// logger repeats `x` between refreshes, and `x` is then [`unhold`]'s reconstruction).
+    pub refresh: usize,
+}
+
+/// A position channel logged slower than its rows, rebuilt between its fresh samples: every
+/// change of value is a fresh sample at its row; between two changes at most `2 refresh` rows
+/// apart (the axis moving) the position is interpolated linearly; across a longer gap it is
+/// held (the axis rested, or crept by less than a count) until `refresh` rows before the next
+/// change, then interpolated. Before the first change it is held until `refresh` rows before
+/// it, after the last one it is held. A zero-order-held position makes every difference over
+/// fewer than `refresh` rows a hold or a jump: the derivatives and the simulations are then
+/// compared with the logger's holds, not with the motion. Returns `x` unchanged for
+/// `refresh <= 1`.
+pub fn unhold(x: &[f64], refresh: usize) -> Vec<f64> {
+    if refresh <= 1 || x.len() < 3 {
+        return x.to_vec();
+    }
+    let knots: Vec<usize> = (1..x.len()).filter(|&i| x[i] != x[i - 1]).collect();
+    let mut out = x.to_vec();
+    let mut ramp = |from: usize, to: usize| {
+        let (x0, x1) = (x[from], x[to]);
+        for (i, o) in out.iter_mut().enumerate().take(to).skip(from + 1) {
+            *o = x0 + (x1 - x0) * (i - from) as f64 / (to - from) as f64;
+        }
+    };
+    if let Some(&b) = knots.first() {
+        ramp(b.saturating_sub(refresh), b);
+    }
+    for w in knots.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        ramp(if b - a <= 2 * refresh { a } else { b - refresh }, b);
+    }
+    out
 }
 
 /// A run with its derivative estimates.
@@ -117,7 +151,8 @@ pub fn window(runs: &[DriveRun]) -> usize {
     // accelerations, biased the inertia 32 % low and named a delay at the grid edge; a run
     // shorter than the window gets the shortened end windows of `derivatives_over`
     let longest = runs.iter().map(|r| r.x.len()).max().unwrap_or(0);
-    let mut w = W;
+    // at least one fresh sample of the position on each side of the centre
+    let mut w = runs.iter().map(|r| r.refresh).max().unwrap_or(1).max(W);
     loop {
         // the quadratic fit's second-derivative weights: (k^2 - m) / S, m = w (w + 1) / 3
         let m = (w * (w + 1)) as f64 / 3.0;
@@ -396,6 +431,7 @@ mod tests {
 
     fn run(dt: f64, x: Vec<f64>) -> DriveRun {
         DriveRun {
+            refresh: 1,
             name: "r".into(),
             held_out: false,
             dt,
@@ -419,6 +455,27 @@ mod tests {
             })
             .collect();
         run(dt, x)
+    }
+
+    #[test]
+    fn a_held_position_is_rebuilt_between_its_fresh_samples() {
+        // a ramp then a rest, logged every row but refreshed every 4 rows
+        let fresh: Vec<f64> = (0..80).map(|k| (k.min(40)) as f64 * 1e-3).collect();
+        let held: Vec<f64> = (0..80).map(|k| fresh[k - k % 4]).collect();
+        let x = unhold(&held, 4);
+        // inside the motion the rebuilt position is the motion, shifted by less than a refresh
+        for k in 8..36 {
+            let lag = (x[k] - fresh[k]).abs();
+            assert!(lag <= 4e-3 + 1e-12, "row {k}: {} vs {}", x[k], fresh[k]);
+        }
+        // every difference while moving is a motion, not a hold or a jump
+        for k in 8..36 {
+            let d = x[k + 1] - x[k];
+            assert!(d > 0.0 && d < 2e-3, "row {k}: step {d}");
+        }
+        // at rest it stays at the held value; unchanged without holds
+        assert_eq!(x[79], held[79]);
+        assert_eq!(unhold(&fresh, 1), fresh);
     }
 
     #[test]

@@ -9,9 +9,10 @@
 //! although its structure is right. Minimising the simulated error itself (output error, the
 //! usual last step of an identification) removes that bias without any derivative.
 //!
-//! Used by the selection (`select.rs`) above the `none` level: a first cause must cut the
-//! held-out error of the refined baseline when refined the same way (else it stands in for
-//! the least squares' bias), and with no cause named the refined baseline is the final model.
+//! Used by the selection (`select.rs`): a first cause must cut the held-out error of the
+//! refined baseline when refined the same way (else it stands in for the least squares'
+//! bias), and above the `none` level, with no cause named, the refined baseline is the final
+//! model.
 //! Fitting runs only: the held-out runs score the result, they never steer it.
 //!
 //! Work: [`SWEEPS`] x (parameters tuned, at most 5) x ([`STEPS`] + 2) simulations of the
@@ -175,6 +176,7 @@ mod tests {
                 deadband: 0.0,
                 delay: 0,
                 saturation: 0.0,
+                load: 0.0,
             },
             flags: Vec::new(),
             first_motion: [Vec::new(), Vec::new()],

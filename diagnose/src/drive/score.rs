@@ -9,9 +9,9 @@ use crane_ident::simulate::{simulate_drive, SimulateError};
 pub struct Scored {
     /// The fit.
     pub est: Estimate,
-    /// Mean held-out position NMAE [%].
+    /// Mean held-out position NMAE [%] (`f64::INFINITY` when a run's simulation diverged).
     pub nmae: f64,
-    /// Per held-out run NMAE [%] (same order as the runs).
+    /// Per held-out run NMAE [%] (same order as the runs; `f64::INFINITY`: diverged).
     pub per_run: Vec<f64>,
     /// Simulated positions per held-out run.
     pub sims: Vec<Vec<f64>>,
@@ -94,9 +94,31 @@ pub fn active_from(run: &Prepared, quantum: f64) -> usize {
     first.saturating_sub(1)
 }
 
-/// Position NMAE of a simulation of a run over the run's active part ([`active_from`]) [%].
+/// A simulation has diverged when it leaves the measured range by this many ranges (either
+/// side, the range floored at the position quantum): its error is no figure, only "diverged"
+/// (a baseline drifting away once printed a held-out NMAE of 33,291,078 %). Tenfold is far
+/// beyond any error a model that follows the run can make (an NMAE of 100 % is a model off
+/// by the whole range on average), and close enough that a runaway is caught before it
+/// dominates a mean.
+pub const DIVERGED_RANGES: f64 = 10.0;
+
+/// Whether a simulation left the measured range by [`DIVERGED_RANGES`] ranges, or is not
+/// finite.
+pub fn diverged(sim: &[f64], meas: &[f64], quantum: f64) -> bool {
+    let (lo, hi) = meas
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
+            (l.min(x), h.max(x))
+        });
+    let range = (hi - lo).max(quantum);
+    let (a, b) = (lo - DIVERGED_RANGES * range, hi + DIVERGED_RANGES * range);
+    sim.iter().any(|&s| !(s >= a && s <= b))
+}
+
+/// Position NMAE of a simulation of a run over the run's active part ([`active_from`]) [%];
+/// `f64::INFINITY` when the simulation diverged ([`diverged`]).
 pub fn run_nmae(sim: &[f64], run: &Prepared, quantum: f64) -> f64 {
-    if sim.len() != run.run.x.len() {
+    if sim.len() != run.run.x.len() || diverged(sim, &run.run.x, quantum) {
         return f64::INFINITY;
     }
     let k = active_from(run, quantum);
@@ -132,4 +154,38 @@ pub fn score(est: Estimate, held: &[&Prepared], quantum: f64) -> Result<Scored, 
         per_run,
         sims,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::{nmae_or_diverged, RunSimulation};
+
+    #[test]
+    fn a_runaway_simulation_is_diverged_and_never_a_figure() {
+        let meas = [0.0, 0.01, 0.02, 0.01];
+        // within the range, or a few ranges off: a (bad) figure
+        assert!(!diverged(&[0.0, 0.05, 0.1, 0.2], &meas, 1e-6));
+        // 10 ranges beyond the largest measured position, or not finite: diverged
+        assert!(diverged(&[0.0, 0.05, 0.1, 0.23], &meas, 1e-6));
+        assert!(diverged(&[0.0, f64::NAN, 0.0, 0.0], &meas, 1e-6));
+        // a run at rest: the range is the quantum
+        assert!(diverged(&[0.0, 0.0, 0.0, 1.2e-5], &[0.0; 4], 1e-6));
+        let r = RunSimulation {
+            file: "a.csv".into(),
+            nmae_before: f64::INFINITY,
+            nmae_after: 3.25,
+            nmae_no_motion: 40.0,
+            moves: true,
+            diverged_before: true,
+            diverged_after: false,
+        };
+        let j = serde_json::to_value(&r).unwrap();
+        assert!(j["nmae_before"].is_null(), "{j}");
+        assert_eq!(j["nmae_after"], 3.25);
+        let back: RunSimulation = serde_json::from_value(j).unwrap();
+        assert_eq!(back, r);
+        assert_eq!(nmae_or_diverged::text(f64::INFINITY, 2), "diverged");
+        assert_eq!(nmae_or_diverged::text(3.254, 2), "3.25 %");
+    }
 }

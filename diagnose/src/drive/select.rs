@@ -4,6 +4,7 @@ use super::cause::DRIVE_CAUSES;
 use super::estimate::{estimate, Dir, DryLevel, Estimate, Flag, Structure};
 use super::prep::{moves, DriveRun, Prepared, Thresholds};
 use super::score::{nmae_no_motion, run_nmae, score, simulate, Scored};
+use crate::report::nmae_or_diverged::text as pct;
 use crate::{
     AxisError, Candidate, Cause, DiagnoseError, DiagnoseOptions, Evidence, FinalModel, Finding,
     HeldoutSimulation, Report, RunSimulation, Verdict,
@@ -13,8 +14,17 @@ use std::collections::BTreeMap;
 
 /// A cause is kept when it cuts the mean held-out simulated NMAE by at least this fraction.
 pub const MIN_GAIN: f64 = 0.05;
-/// Below this held-out simulated NMAE [%] the baseline is called right (`none`).
+/// Below this held-out simulated NMAE [%] the baseline is called right (`none`) when no
+/// cause passes [`SMALL_GAIN`].
 pub const NONE_LEVEL: f64 = 5.0;
+/// Below [`NONE_LEVEL`] a first cause is named only when it removes at least this fraction
+/// of the held-out error, cuts the error of every held-out run that moves, and passes the
+/// output-error test against the refined baseline; no further cause is tried there. What is
+/// left below 5 % is mostly estimation error, and any extra parameter trades against it: on
+/// the rigs of `tests/strangers.rs`, where the truth is known, causes that were not there cut
+/// 14-52 % of it; a hidden cause that the baseline had absorbed (a dead band taken up by the
+/// Coulomb level, load-dependent friction by the inertia and gain) removed 91-96 %.
+pub const SMALL_GAIN: f64 = 0.5;
 /// The sliding least-squares dry level replaces the level at first motion (see
 /// [`DryLevel`]) when its simulated NMAE of the fitting runs is this many times smaller.
 /// The level at first motion is the default: it is what keeps an axis at rest under forces
@@ -29,17 +39,20 @@ pub const SLIDING_LEVEL_GAIN: f64 = 1.5;
 /// Fewest motions (faster than the motion threshold, either direction) the fitting runs must
 /// hold for a cause to be named.
 pub const MIN_FIT_MOTIONS: usize = 2;
-/// Largest input delay tried [samples].
-pub const MAX_DELAY: usize = 8;
-/// Dead bands tried, as fractions of the largest |input| of the fitting runs.
-pub const DEADBAND_GRID: [f64; 7] = [0.005, 0.01, 0.02, 0.04, 0.08, 0.15, 0.3];
+/// Dead bands tried, as fractions of the largest |input| of the fitting runs; the best is
+/// refined between its neighbours by [`GRID_REFINE`] golden-section steps.
+pub const DEADBAND_GRID: [f64; 8] = [0.005, 0.01, 0.02, 0.04, 0.08, 0.15, 0.3, 0.5];
 /// Saturation levels tried: these quantiles of |input| over the fitting runs' moving samples
 /// (levels at or above the largest |input| clip nothing and are dropped); the best is refined
-/// between its neighbours by [`SATURATION_REFINE`] golden-section steps.
+/// between its neighbours by [`GRID_REFINE`] golden-section steps.
 pub const SATURATION_QUANTILES: [f64; 11] =
     [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 0.99];
-/// Golden-section steps refining the best saturation grid level (on the fitting runs).
-pub const SATURATION_REFINE: usize = 10;
+/// Load shares `mu` tried for load-dependent friction (every dry level plus `mu |F|`): from
+/// a fine screw or gear (a few %) to a worm gear near self-locking.
+pub const LOAD_GRID: [f64; 8] = [0.01, 0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.8];
+/// Golden-section steps refining the best dead band, saturation or load-share grid value (on the
+/// fitting runs): the bracket shrinks to 0.618^8, under 2 % of the grid step.
+pub const GRID_REFINE: usize = 10;
 
 /// What the data set says about the axis.
 #[derive(Clone, Debug, PartialEq)]
@@ -148,6 +161,7 @@ pub fn diagnose_drive(
         deadband: 0.0,
         delay: 0,
         saturation: 0.0,
+        load: 0.0,
     };
     // too few sliding samples or a singular least squares is the data's limit (an input
     // error naming it), a failed simulation the model's
@@ -164,15 +178,15 @@ pub fn diagnose_drive(
     let inertia_unknown = at_floor(&baseline.est);
     // The baseline by output error: derivative-based least squares are biased by a coarse
     // encoder or a long derivative window, and the model then drifts in simulation although
-    // its structure is right. Above NONE_LEVEL the baseline's inertia, viscous and dry friction
-    // are tuned on the fitting runs' simulation ([`super::refine`]). A first cause must then cut
-    // the held-out error both ways, least squares against least squares and refined against
-    // refined (else it stands in for the bias: a 1 mm encoder count named a saturation);
-    // with no cause named the refined baseline is the final model, and `none` within
-    // NONE_LEVEL. The least-squares baseline stays the one the candidates extend and the one
-    // the `none` rule before any candidate looks at.
-    // (not refined with the inertia at its floor: the verdict says it is not identifiable)
-    let refined: Option<Scored> = (baseline.selection > NONE_LEVEL && !inertia_unknown)
+    // its structure is right. The baseline's inertia, viscous and dry friction are tuned on
+    // the fitting runs' simulation ([`super::refine`]). A first cause must then cut the
+    // held-out error both ways, least squares against least squares and refined against
+    // refined (else it stands in for the bias: a 1 mm encoder count named a saturation).
+    // Above NONE_LEVEL, with no cause named, the refined baseline is the final model, and
+    // `none` within NONE_LEVEL. The least-squares baseline stays the one the candidates
+    // extend. (Not refined with the inertia at its floor: the verdict says it is not
+    // identifiable.)
+    let refined: Option<Scored> = (!inertia_unknown)
         .then(|| super::refine::refine(&baseline.est, &fit_error))
         .flatten()
         .and_then(|(est, _)| score_est(est).ok())
@@ -188,6 +202,9 @@ pub fn diagnose_drive(
         .flat_map(|p| p.run.u.iter())
         .fold(0.0f64, |m, u| m.max(u.abs()));
     let sat_grid = saturation_grid(&fit, &th, umax);
+    // the fitting runs' sample period: delays are whole samples of it
+    let dt = fit.iter().map(|p| p.run.dt).fold(f64::INFINITY, f64::min);
+    let shortest = fit.iter().map(|p| p.run.x.len()).min().unwrap_or(0);
     let search = Search {
         fit_and_score: &fit_and_score,
         fit_only: &fit_only,
@@ -195,6 +212,8 @@ pub fn diagnose_drive(
         fit_error: &fit_error,
         umax,
         sat_grid: &sat_grid,
+        delay_grid: &super::grid::delay_grid(dt, shortest),
+        dt,
     };
     let mut current = baseline.clone();
     let mut used: Vec<Cause> = Vec::new();
@@ -217,20 +236,53 @@ pub fn diagnose_drive(
     let one_way = fit_pos == 0 || fit_neg == 0;
     let too_thin = fit_motions < MIN_FIT_MOTIONS;
     let unseen = unseen_direction(&fit, &held, &th);
+    // the log's own timing uncertainty [samples]: the input is held over a sample while the
+    // position is read at its start (one sample), and a position refreshed every `r` rows is
+    // up to `r - 1` rows old
+    let timing = prepared
+        .iter()
+        .map(|p| p.run.refresh)
+        .max()
+        .unwrap_or(1)
+        .max(1);
+    let range_mean = held
+        .iter()
+        .map(|r| {
+            let (lo, hi) = r
+                .run
+                .x
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
+                    (l.min(x), h.max(x))
+                });
+            (hi - lo).max(th.quantum)
+        })
+        .sum::<f64>()
+        / held.len() as f64;
+    // the held-out NMAE of the encoder's own error: half a count over the mean range [%]
+    let noise_floor = 100.0 * 0.5 * th.quantum / range_mean;
     for _round in 0..DRIVE_CAUSES.len() {
         if too_thin || unseen.is_some() {
             break;
         }
-        // a model that already simulates the held-out runs within NONE_LEVEL is right: what
-        // is left is estimation error, which any extra parameter (a delay, a dead band, a
-        // tiny spring) can trade against and "explain" on every rig
-        if current.selection <= NONE_LEVEL {
+        // a model that simulates the held-out runs within the encoder's own error leaves
+        // nothing to explain. Above that, an error below NONE_LEVEL may still hide a cause
+        // (a dead band that the Coulomb level absorbs while sliding leaves 4 % on a log whose
+        // noise floor is 0.001 %); it is named only on stricter evidence (below)
+        if current.selection <= noise_floor {
             if findings.is_empty() {
                 notes.insert(
                     Cause::InputDelay,
-                    format!("no cause tried: the baseline simulates the held-out runs within {NONE_LEVEL} % NMAE"),
+                    format!("no cause tried: the baseline simulates the held-out runs at {:.4} %, within the encoder's own error ({noise_floor:.4} %: half a count over the mean range)", current.selection),
                 );
             }
+            break;
+        }
+        let small = current.selection <= NONE_LEVEL;
+        // after a first cause, a model within NONE_LEVEL is right: the first cause below it
+        // must also pass the output-error test against the refined baseline (below), which
+        // a further one would not get
+        if small && !findings.is_empty() {
             break;
         }
         let mut best: Option<(Cause, Scored, Option<String>)> = None;
@@ -241,7 +293,15 @@ pub fn diagnose_drive(
             let Some((scored, edge)) = try_cause(cause, &current, &search) else {
                 continue;
             };
-            let (ok, why) = if at_floor(&scored.est) {
+            let (ok, why) = if let Some(e) = &edge {
+                // the best value may lie beyond what was tried: no finding
+                (
+                    false,
+                    Some(format!(
+                        "{cause} not named: {e}; the best value may lie beyond the values tried"
+                    )),
+                )
+            } else if at_floor(&scored.est) {
                 (
                     false,
                     Some(format!(
@@ -249,10 +309,18 @@ pub fn diagnose_drive(
                     )),
                 )
             } else {
-                physical(cause, &scored.est, &current.est, umax)
+                physical(cause, &scored.est, &current.est, umax, timing)
             };
             let gain = 1.0 - scored.selection / current.selection;
-            let mut supported = ok && gain >= MIN_GAIN;
+            // below NONE_LEVEL what is left is mostly estimation error, which any extra
+            // parameter (a delay, a dead band, a tiny spring) trades against: there a cause
+            // must remove most of the error (SMALL_GAIN) and cut that of every held-out run
+            // that moves
+            let every_run = selection_runs
+                .iter()
+                .all(|&i| scored.per_run[i] < current.per_run[i]);
+            let mut supported =
+                ok && gain >= MIN_GAIN && (!small || (every_run && gain >= SMALL_GAIN));
             let mut oe_note = None;
             // against the refined baseline, the candidate refined the same way: a cause must
             // cut the error whichever way the parameters are estimated (least squares against
@@ -269,10 +337,10 @@ pub fn diagnose_drive(
                 supported = gain_oe >= MIN_GAIN;
                 if !supported {
                     oe_note = Some(format!(
-                            "{cause}: cuts the least-squares baseline's held-out NMAE by {:.0} % but, both refined by output error on the fitting runs, {:.2} % -> {:.2} % ({:.0} %): it stands in for the least squares' bias",
+                            "{cause}: cuts the least-squares baseline's held-out NMAE by {:.0} % but, both refined by output error on the fitting runs, {} -> {} ({:.0} %): it stands in for the least squares' bias",
                             100.0 * gain,
-                            r.selection,
-                            oe,
+                            pct(r.selection, 2),
+                            pct(oe, 2),
                             100.0 * gain_oe
                     ));
                 }
@@ -280,7 +348,7 @@ pub fn diagnose_drive(
             candidates.push(Candidate {
                 cause,
                 axis: "axis".into(),
-                parameters: cause_parameters(cause, &scored.est),
+                parameters: cause_parameters(cause, &scored.est, dt),
                 score: (scored.selection / current.selection).ln(),
                 force_delta_bic: 0.0,
                 supported,
@@ -303,16 +371,16 @@ pub fn diagnose_drive(
                 best = Some((cause, scored, edge));
             }
         }
-        let Some((cause, scored, edge)) = best else {
+        let Some((cause, scored, _)) = best else {
             break;
         };
         let mut note = format!(
-            "held-out simulated position NMAE {:.2} % -> {:.2} % over the {} held-out runs that move ({:.2} % -> {:.2} % over all {})",
-            current.selection,
-            scored.selection,
+            "held-out simulated position NMAE {} -> {} over the {} held-out runs that move ({} -> {} over all {})",
+            pct(current.selection, 2),
+            pct(scored.selection, 2),
             selection_runs.len(),
-            current.nmae,
-            scored.nmae,
+            pct(current.nmae, 2),
+            pct(scored.nmae, 2),
             held.len()
         );
         if let (Some(r), Some((oe, g))) = (
@@ -320,15 +388,11 @@ pub fn diagnose_drive(
             refined_cuts.get(&cause),
         ) {
             note.push_str(&format!(
-                "; both refined by output error on the fitting runs: {:.2} % -> {:.2} % ({:.0} % cut)",
-                r.selection,
-                oe,
+                "; both refined by output error on the fitting runs: {} -> {} ({:.0} % cut)",
+                pct(r.selection, 2),
+                pct(*oe, 2),
                 100.0 * g
             ));
-        }
-        if let Some(e) = edge {
-            note.push_str("; ");
-            note.push_str(&e);
         }
         if cause == Cause::InputSaturation {
             let sat = scored.est.structure.saturation;
@@ -365,7 +429,7 @@ pub fn diagnose_drive(
         findings.push(Finding {
             cause,
             axis: "axis".into(),
-            parameters: cause_parameters(cause, &scored.est),
+            parameters: cause_parameters(cause, &scored.est, dt),
             nmae_before: current.selection,
             nmae_after: scored.selection,
             evidence: Evidence {
@@ -384,7 +448,11 @@ pub fn diagnose_drive(
     }
     // no cause named: the final model is the baseline refined by output error (it simulates
     // the fitting runs better by construction), `none` if that is within NONE_LEVEL
-    let refined_final = findings.is_empty() && unseen.is_none() && !too_thin && refined.is_some();
+    let refined_final = findings.is_empty()
+        && unseen.is_none()
+        && !too_thin
+        && refined.is_some()
+        && baseline.selection > NONE_LEVEL;
     let final_ = match refined {
         Some(r) if refined_final => r,
         _ => current,
@@ -393,9 +461,9 @@ pub fn diagnose_drive(
     let refine_note = refined_final.then(|| {
         let (p0, p1) = (&baseline.est.params, &final_.est.params);
         format!(
-            "baseline inertia, viscous and dry friction refined by output error on the fitting runs (their simulated NMAE {:.2} % -> {:.2} %): inertia {:.4} -> {:.4}, viscous {:.4} / {:.4} -> {:.4} / {:.4}, kinetic {:.4} / {:.4} -> {:.4} / {:.4}",
-            fit_error(&baseline.est),
-            fit_error(&final_.est),
+            "baseline inertia, viscous and dry friction refined by output error on the fitting runs (their simulated NMAE {} -> {}): inertia {:.4} -> {:.4}, viscous {:.4} / {:.4} -> {:.4} / {:.4}, kinetic {:.4} / {:.4} -> {:.4} / {:.4}",
+            pct(fit_error(&baseline.est), 2),
+            pct(fit_error(&final_.est), 2),
             p0.inertia,
             p1.inertia,
             p0.viscous_pos,
@@ -412,13 +480,18 @@ pub fn diagnose_drive(
     // --- verdict ------------------------------------------------------------------------------
     let (verdict, verdict_reason) = if let Some(f) = findings.first() {
         let mut r = format!(
-            "{} cuts the held-out simulated position NMAE from {:.2} % to {:.2} % (all findings: {:.2} % -> {:.2} %; predicting no motion: {:.2} %)",
-            f.cause, f.nmae_before, f.nmae_after, baseline.selection, final_.selection, sel_no_motion
+            "{} cuts the held-out simulated position NMAE from {} to {} (all findings: {} -> {}; predicting no motion: {:.2} %)",
+            f.cause,
+            pct(f.nmae_before, 2),
+            pct(f.nmae_after, 2),
+            pct(baseline.selection, 2),
+            pct(final_.selection, 2),
+            sel_no_motion
         );
         if final_.selection > NONE_LEVEL {
             r.push_str(&format!(
-                "; the rest ({:.2} %) is not explained by any candidate",
-                final_.selection
+                "; the rest ({}) is not explained by any candidate",
+                pct(final_.selection, 2)
             ));
         }
         (Verdict::Found(f.cause), r)
@@ -426,9 +499,9 @@ pub fn diagnose_drive(
         (
             Verdict::Unexplained,
             format!(
-                "not identifiable: the held-out runs move {dir} (runs {}), which no fitting run does; a model fitted on one direction cannot predict the other (a load such as gravity, or friction that depends on the direction, makes them differ), so no cause is named; the baseline's held-out simulated position NMAE is {:.2} % (predicting no motion: {:.2} %); hold out runs so that the fitting runs move in both directions (`kind = \"validation\"` on the held-out runs in `dataset.toml`)",
+                "not identifiable: the held-out runs move {dir} (runs {}), which no fitting run does; a model fitted on one direction cannot predict the other (a load such as gravity, or friction that depends on the direction, makes them differ), so no cause is named; the baseline's held-out simulated position NMAE is {} (predicting no motion: {:.2} %); hold out runs so that the fitting runs move in both directions (`kind = \"validation\"` on the held-out runs in `dataset.toml`)",
                 moving_names(&held, &th, dir.sign()),
-                baseline.selection,
+                pct(baseline.selection, 2),
                 sel_no_motion
             ),
         )
@@ -436,25 +509,25 @@ pub fn diagnose_drive(
         (
             Verdict::Unexplained,
             format!(
-                "not identifiable: the fitting data hold {fit_motions} motion(s), fewer than {MIN_FIT_MOTIONS}: inertia, friction and any input effect trade against each other on one slide, so no cause is named; the baseline's held-out simulated position NMAE is {:.2} % (predicting no motion: {:.2} %)",
-                baseline.selection, sel_no_motion
+                "not identifiable: the fitting data hold {fit_motions} motion(s), fewer than {MIN_FIT_MOTIONS}: inertia, friction and any input effect trade against each other on one slide, so no cause is named; the baseline's held-out simulated position NMAE is {} (predicting no motion: {:.2} %)",
+                pct(baseline.selection, 2), sel_no_motion
             ),
         )
     } else if inertia_unknown && at_floor(&final_.est) {
         (
             Verdict::Unexplained,
             format!(
-                "not identifiable: the fitting runs do not determine the inertia (it sits at its floor), so no cause is named; the baseline's held-out simulated position NMAE is {:.2} % (predicting no motion: {:.2} %); longer runs with several accelerations in each direction are needed",
-                baseline.selection, sel_no_motion
+                "not identifiable: the fitting runs do not determine the inertia (it sits at its floor), so no cause is named; the baseline's held-out simulated position NMAE is {} (predicting no motion: {:.2} %); longer runs with several accelerations in each direction are needed",
+                pct(baseline.selection, 2), sel_no_motion
             ),
         )
     } else if refined_none {
         (
             Verdict::None,
             format!(
-                "the baseline refined by output error on the fitting runs simulates the held-out runs at {:.2} % (<= {NONE_LEVEL} %; with its least-squares parameters {:.2} %), and no candidate cuts that by {:.0} % with physical parameters",
+                "the baseline refined by output error on the fitting runs simulates the held-out runs at {:.2} % (<= {NONE_LEVEL} %; with its least-squares parameters {}), and no candidate cuts that by {:.0} % with physical parameters",
                 final_.selection,
-                baseline.selection,
+                pct(baseline.selection, 2),
                 100.0 * MIN_GAIN
             ),
         )
@@ -470,10 +543,10 @@ pub fn diagnose_drive(
         (
             Verdict::Unexplained,
             format!(
-                "the baseline's held-out simulated position NMAE is {:.2} %{} (predicting no motion: {:.2} %) and no candidate cuts it by {:.0} % with physical parameters",
-                baseline.selection,
+                "the baseline's held-out simulated position NMAE is {}{} (predicting no motion: {:.2} %) and no candidate cuts it by {:.0} % with physical parameters",
+                pct(baseline.selection, 2),
                 if refined_final {
-                    format!(", {:.2} % refined by output error on the fitting runs", final_.selection)
+                    format!(", {} refined by output error on the fitting runs", pct(final_.selection, 2))
                 } else {
                     String::new()
                 },
@@ -505,25 +578,11 @@ pub fn diagnose_drive(
             v.iter().sum::<f64>() / v.len() as f64
         }
     };
-    let range_mean = held
-        .iter()
-        .map(|r| {
-            let (lo, hi) = r
-                .run
-                .x
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
-                    (l.min(x), h.max(x))
-                });
-            (hi - lo).max(th.quantum)
-        })
-        .sum::<f64>()
-        / held.len() as f64;
     let baseline_errors = vec![AxisError {
         axis: "axis".into(),
         nmae_fit: finite_or_zero(fit_nmae(&baseline.est)),
         nmae_held_out: baseline.nmae,
-        nmae_noise: 100.0 * 0.5 * th.quantum / range_mean,
+        nmae_noise: noise_floor,
         force_rms_fit_n: force_rms(&baseline.est, &fit, &th),
         force_rms_held_out_n: force_rms(&baseline.est, &held, &th),
         force_rel_err_held_out_pct: force_rel(&baseline.est, &held, &th),
@@ -544,6 +603,8 @@ pub fn diagnose_drive(
                 nmae_after: final_.per_run[i],
                 nmae_no_motion: no_motion[i],
                 moves: moving[i],
+                diverged_before: !baseline.per_run[i].is_finite(),
+                diverged_after: !final_.per_run[i].is_finite(),
             })
             .collect(),
     };
@@ -568,7 +629,7 @@ pub fn diagnose_drive(
         });
     }
     flags.extend(notes.into_values());
-    let final_model = final_model(&final_.est, info, &flags);
+    let final_model = final_model(&final_.est, info, &flags, dt);
     if let Some(dir) = &opts.plots_dir {
         super::plots::write_all(dir, &held, &baseline, &final_, &th, info)
             .map_err(|e| DiagnoseError::Io(format!("{}: {e}", dir.display())))?;
@@ -723,6 +784,10 @@ struct Search<'a> {
     umax: f64,
     /// Saturation levels tried ([`saturation_grid`]).
     sat_grid: &'a [f64],
+    /// Delays tried [samples] ([`super::grid::delay_grid`]), ascending.
+    delay_grid: &'a [usize],
+    /// The fitting runs' sample period [s] (the shortest, if they differ).
+    dt: f64,
 }
 
 /// The saturation levels tried: [`SATURATION_QUANTILES`] of |input| over the fitting runs'
@@ -779,115 +844,106 @@ fn try_cause(
         }),
         Cause::ForceOffset if !s.offset => one(Structure { offset: true, ..s }),
         Cause::InputDeadzone if s.deadband == 0.0 && umax > 0.0 => {
-            // the grid point is chosen on the fitting runs: the held-out runs then score an
+            // the value is chosen on the fitting runs: the held-out runs then score an
             // honestly chosen value (choosing on them would select on the test set)
-            let mut best: Option<(usize, Scored, f64)> = None;
-            for (k, f) in DEADBAND_GRID.iter().enumerate() {
-                if let Ok(r) = fit_and_score(Structure {
-                    deadband: f * umax,
-                    ..s
-                }) {
-                    let e = fit_error(&r.est);
-                    if best.as_ref().is_none_or(|b| e < b.2) {
-                        best = Some((k, r, e));
+            let grid: Vec<f64> = DEADBAND_GRID.iter().map(|f| f * umax).collect();
+            let b = super::grid::continuous(&grid, GRID_REFINE, |d| {
+                let est = (search.fit_only)(Structure { deadband: d, ..s }).ok()?;
+                let e = fit_error(&est);
+                Some((est, e))
+            })?;
+            let edge = b.at_edge(&grid, true).then(|| {
+                format!(
+                    "dead band at the {} value tried ({:.4}, {} of the largest |input|; grid edge)",
+                    if b.at == grid[0] {
+                        "smallest"
+                    } else {
+                        "largest"
+                    },
+                    b.at,
+                    if b.at == grid[0] {
+                        DEADBAND_GRID[0]
+                    } else {
+                        DEADBAND_GRID[DEADBAND_GRID.len() - 1]
                     }
-                }
-            }
-            best.map(|(k, r, _)| {
-                let edge = (k + 1 == DEADBAND_GRID.len())
-                    .then(|| "dead band at the largest value tried (grid edge)".to_string());
-                (r, edge)
-            })
+                )
+            });
+            (search.score_est)(b.value).ok().map(|r| (r, edge))
         }
         Cause::InputSaturation if s.saturation == 0.0 && !search.sat_grid.is_empty() => {
             // levels chosen on the fitting runs, like the dead band's: the grid over quantiles
-            // of |u| while moving, then golden-section steps between the best level's
-            // neighbours; only the chosen model is scored on the held-out runs
+            // of |u| while moving, refined between the best level's neighbours; only the
+            // chosen model is scored on the held-out runs
             let grid = search.sat_grid;
-            let eval = |level: f64| -> Option<(Estimate, f64)> {
+            let b = super::grid::continuous(grid, GRID_REFINE, |level| {
                 let est = (search.fit_only)(Structure {
                     saturation: level,
                     ..s
                 })
                 .ok()?;
                 let e = fit_error(&est);
-                e.is_finite().then_some((est, e))
-            };
-            let mut best: Option<(usize, Estimate, f64)> = None;
-            for (k, &level) in grid.iter().enumerate() {
-                if let Some((est, e)) = eval(level) {
-                    if best.as_ref().is_none_or(|b| e < b.2) {
-                        best = Some((k, est, e));
-                    }
-                }
-            }
-            let (k, mut est, mut err) = best?;
-            let (mut a, mut b) = (grid[k.saturating_sub(1)], grid[(k + 1).min(grid.len() - 1)]);
-            if b > a {
-                let g = 0.5 * (5f64.sqrt() - 1.0);
-                let mut keep = |r: Option<(Estimate, f64)>| -> f64 {
-                    match r {
-                        Some((e2, f)) => {
-                            if f < err {
-                                est = e2;
-                                err = f;
-                            }
-                            f
-                        }
-                        None => f64::INFINITY,
-                    }
-                };
-                let (mut c, mut d) = (b - g * (b - a), a + g * (b - a));
-                let (mut fc, mut fd) = (keep(eval(c)), keep(eval(d)));
-                for _ in 2..SATURATION_REFINE {
-                    if fc <= fd {
-                        b = d;
-                        (d, fd) = (c, fc);
-                        c = b - g * (b - a);
-                        fc = keep(eval(c));
-                    } else {
-                        a = c;
-                        (c, fc) = (d, fd);
-                        d = a + g * (b - a);
-                        fd = keep(eval(d));
-                    }
-                }
-            }
-            let edge = (k == 0 || k + 1 == grid.len()).then(|| {
+                Some((est, e))
+            })?;
+            let edge = b.at_edge(grid, true).then(|| {
                 format!(
-                    "saturation level near the {} level tried ({} quantile of |input| while moving, grid edge)",
-                    if k == 0 { "lowest" } else { "highest" },
-                    SATURATION_QUANTILES
-                        .get(if k == 0 { 0 } else { SATURATION_QUANTILES.len() - 1 })
-                        .copied()
-                        .unwrap_or(0.0)
+                    "saturation level at the {} level tried ({:.4}, the {} quantile of |input| while moving; grid edge)",
+                    if b.at == grid[0] { "lowest" } else { "highest" },
+                    b.at,
+                    if b.at == grid[0] { SATURATION_QUANTILES[0] } else { SATURATION_QUANTILES[SATURATION_QUANTILES.len() - 1] }
                 )
             });
-            (search.score_est)(est).ok().map(|r| (r, edge))
+            (search.score_est)(b.value).ok().map(|r| (r, edge))
         }
-        Cause::InputDelay if s.delay == 0 => {
-            let mut best: Option<(usize, Scored, f64)> = None;
-            for d in 1..=MAX_DELAY {
-                if let Ok(r) = fit_and_score(Structure { delay: d, ..s }) {
-                    let e = fit_error(&r.est);
-                    if best.as_ref().is_none_or(|b| e < b.2) {
-                        best = Some((d, r, e));
-                    }
-                }
-            }
-            best.map(|(d, r, _)| {
-                let edge = (d == MAX_DELAY).then(|| {
-                    format!("delay at the largest value tried ({MAX_DELAY} samples, grid edge)")
-                });
-                (r, edge)
-            })
+        Cause::LoadDependentFriction if s.load == 0.0 => {
+            // chosen on the fitting runs' simulation, like the dead band: a least squares of
+            // `mu` against the effort it multiplies trades it for the inertia and gain
+            let b = super::grid::continuous(&LOAD_GRID, GRID_REFINE, |mu| {
+                let est = (search.fit_only)(Structure { load: mu, ..s }).ok()?;
+                let e = fit_error(&est);
+                Some((est, e))
+            })?;
+            let edge = b.at_edge(&LOAD_GRID, true).then(|| {
+                format!(
+                    "load share mu at the {} value tried ({:.4}; grid edge)",
+                    if b.at == LOAD_GRID[0] {
+                        "smallest"
+                    } else {
+                        "largest"
+                    },
+                    b.at
+                )
+            });
+            (search.score_est)(b.value).ok().map(|r| (r, edge))
+        }
+        Cause::InputDelay if s.delay == 0 && !search.delay_grid.is_empty() => {
+            let grid = search.delay_grid;
+            let b = super::grid::integer(grid, |d| {
+                let est = (search.fit_only)(Structure { delay: d, ..s }).ok()?;
+                let e = fit_error(&est);
+                Some((est, e))
+            })?;
+            let edge = b.at_edge(grid, false).then(|| {
+                format!(
+                    "delay at the largest value tried ({} samples, {:.4} s; grid edge)",
+                    b.at,
+                    b.at as f64 * search.dt
+                )
+            });
+            (search.score_est)(b.value).ok().map(|r| (r, edge))
         }
         _ => None,
     }
 }
 
-/// Whether a cause's fitted parameters are physical; otherwise why not.
-fn physical(cause: Cause, est: &Estimate, before: &Estimate, umax: f64) -> (bool, Option<String>) {
+/// Whether a cause's fitted parameters are physical; otherwise why not. `timing`: the log's
+/// own timing uncertainty [samples] (see `diagnose_drive`).
+fn physical(
+    cause: Cause,
+    est: &Estimate,
+    before: &Estimate,
+    umax: f64,
+    timing: usize,
+) -> (bool, Option<String>) {
     let p = &est.params;
     match cause {
         Cause::RestoringForce => {
@@ -926,7 +982,17 @@ fn physical(cause: Cause, est: &Estimate, before: &Estimate, umax: f64) -> (bool
                     )),
                 }
             }
-            if named {
+            if named && !(p.kinetic_pos > 0.0 && p.kinetic_neg > 0.0) {
+                // a breakaway over a sliding friction of 0 is no ratio: the sliding level
+                // went to its bound (the input effect or load it stands in for is elsewhere)
+                (
+                    false,
+                    Some(format!(
+                        "stiction not named: the sliding friction is at 0 (+{:.4} / -{:.4}), so static over kinetic friction is undefined",
+                        p.kinetic_pos, p.kinetic_neg
+                    )),
+                )
+            } else if named {
                 (true, None)
             } else {
                 (
@@ -966,7 +1032,27 @@ fn physical(cause: Cause, est: &Estimate, before: &Estimate, umax: f64) -> (bool
         }
         Cause::ForceOffset => (p.offset.is_finite(), None),
         Cause::InputDeadzone => (est.structure.deadband > before.structure.deadband, None),
-        Cause::InputDelay => (est.structure.delay > 0, None),
+        Cause::InputDelay if est.structure.delay <= timing => (
+            false,
+            Some(format!(
+                "input_delay: {} sample(s) is within the log's own timing uncertainty ({timing}: the zero-order hold's sample, and the rows between fresh positions): the recorded input and position cannot place a delay that short",
+                est.structure.delay
+            )),
+        ),
+        Cause::InputDelay => (true, None),
+        Cause::LoadDependentFriction => {
+            let mu = p.load_friction;
+            if mu > 0.0 && mu < 1.0 {
+                (true, None)
+            } else {
+                (
+                    false,
+                    Some(format!(
+                        "load_dependent_friction: the fitted load share {mu:.4} is not between 0 and 1 (0: the dry friction does not grow with the drive effort; 1 or more: it would grow faster than the effort, and the axis could never be driven)"
+                    )),
+                )
+            }
+        }
         Cause::InputSaturation => {
             let sat = est.structure.saturation;
             // the level must stand clear of the dry friction: within the run-to-run scatter
@@ -1063,10 +1149,12 @@ fn extra_parameters(cause: Cause) -> usize {
         Cause::InputSaturation => 1,
         Cause::LocalizedFriction => 3,
         Cause::PayloadMass => 1,
+        Cause::LoadDependentFriction => 1,
     }
 }
 
-fn cause_parameters(cause: Cause, est: &Estimate) -> BTreeMap<String, f64> {
+/// A cause's parameters for the report; `dt` is the fitting runs' sample period [s].
+fn cause_parameters(cause: Cause, est: &Estimate, dt: f64) -> BTreeMap<String, f64> {
     let p = &est.params;
     let mut m = BTreeMap::new();
     let ratio = |b: f64, k: f64| if k > 0.0 { b / k } else { 0.0 };
@@ -1094,17 +1182,21 @@ fn cause_parameters(cause: Cause, est: &Estimate) -> BTreeMap<String, f64> {
             m.insert("deadband".into(), est.structure.deadband);
         }
         Cause::InputDelay => {
+            m.insert("delay_s".into(), est.structure.delay as f64 * dt);
             m.insert("delay_samples".into(), est.structure.delay as f64);
         }
         Cause::InputSaturation => {
             m.insert("saturation".into(), est.structure.saturation);
+        }
+        Cause::LoadDependentFriction => {
+            m.insert("mu".into(), p.load_friction);
         }
         Cause::LocalizedFriction | Cause::PayloadMass => {}
     }
     m
 }
 
-fn final_model(est: &Estimate, info: &DriveInfo, flags: &[String]) -> FinalModel {
+fn final_model(est: &Estimate, info: &DriveInfo, flags: &[String], dt: f64) -> FinalModel {
     let p = &est.params;
     FinalModel {
         position_unit: info.position_unit.clone(),
@@ -1121,6 +1213,8 @@ fn final_model(est: &Estimate, info: &DriveInfo, flags: &[String]) -> FinalModel
         offset: p.offset,
         deadband: est.structure.deadband,
         delay_samples: est.structure.delay,
+        delay_s: est.structure.delay as f64 * dt,
+        load_friction: p.load_friction,
         saturation: (est.structure.saturation > 0.0).then_some(est.structure.saturation),
         breakaway_scatter_pos: est.breakaway_scatter[0].unwrap_or(0.0),
         breakaway_scatter_neg: est.breakaway_scatter[1].unwrap_or(0.0),
