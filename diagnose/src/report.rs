@@ -372,6 +372,11 @@ pub struct FinalModel {
     /// Load share `mu` [1]: every dry level grows by `mu |F|` of the drive effort; 0: none.
     #[serde(default)]
     pub load_friction: f64,
+    /// Localized friction: every dry level plus `A (1 - s^2)^2`, `s = (x - center) /
+    /// half_width`, as `[center, half_width, A]` [position unit, position unit, force unit];
+    /// `null`: none.
+    #[serde(default)]
+    pub bump: Option<[f64; 3]>,
     /// Level at which the applied effort saturates, `clamp(u, -s, +s)` [force unit]; `null`
     /// when the model has no saturation.
     #[serde(default)]

@@ -25,7 +25,7 @@
 use crane_diagnose::{diagnose, Cause, DiagnoseError, DiagnoseOptions, Report, Verdict};
 use crane_ident::rng::Rng;
 use crane_ident::simulate::{simulate_drive, substeps};
-use crane_model::drive::{Drive, DriveParams, Motion, PositionForce};
+use crane_model::drive::{Drive, DriveParams, LocalFriction, Motion, PositionForce};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -622,6 +622,25 @@ fn rigs_drawn(seed: u64) -> Vec<Rig> {
         r.must = &[Cause::LoadDependentFriction];
         v.push(r);
     }
+    // 16. a carriage with a rough stretch of rail: 1.5 N more dry friction around x = 0.05 m
+    //     (half-width 30 mm), crossed both ways by the pulses, force input
+    {
+        let dt = 1e-3;
+        let mut truth = lin(2.0, [3.0; 2], [3.0; 2], [10.0; 2]);
+        truth.local_friction = LocalFriction::Bump {
+            center: 0.05,
+            half_width: 0.03,
+            amplitude: 1.5,
+        };
+        let runs = (0..4)
+            .map(|_| pulses(&mut rng, dt, 8, 5.0, 9.0, 0.3, 0.3, 0.0, false))
+            .collect();
+        let mut r = base("linear_rough_stretch_N_1kHz", truth, dt, runs);
+        r.quantum = 1e-6;
+        r.effects = &[Cause::LocalizedFriction];
+        r.must = &[Cause::LocalizedFriction];
+        v.push(r);
+    }
     v
 }
 
@@ -712,6 +731,24 @@ fn judge(rig: &Rig, r: &Report) -> Vec<String> {
                     p("delay_samples"),
                     rig.delay as f64 * rig.dt
                 ));
+            }
+            Cause::LocalizedFriction => {
+                if let LocalFriction::Bump {
+                    center,
+                    half_width,
+                    amplitude,
+                } = rig.truth.local_friction
+                {
+                    if !((p("center_m") - center).abs() <= 0.5 * half_width
+                        && (p("amplitude_n") - amplitude).abs() <= 0.25 * amplitude)
+                    {
+                        bad.push(format!(
+                            "bump {} at {}, truth {amplitude} at {center}",
+                            p("amplitude_n"),
+                            p("center_m")
+                        ));
+                    }
+                }
             }
             Cause::LoadDependentFriction
                 if !((p("mu") - rig.truth.load_friction).abs()

@@ -3,7 +3,7 @@
 use crate::Cause;
 
 /// Every cause tried on single-axis open-loop data, in the order they are tried.
-pub const DRIVE_CAUSES: [Cause; 8] = [
+pub const DRIVE_CAUSES: [Cause; 9] = [
     Cause::RestoringForce,
     Cause::Stiction,
     Cause::DirectionAsymmetry,
@@ -12,4 +12,5 @@ pub const DRIVE_CAUSES: [Cause; 8] = [
     Cause::InputSaturation,
     Cause::InputDelay,
     Cause::LoadDependentFriction,
+    Cause::LocalizedFriction,
 ];

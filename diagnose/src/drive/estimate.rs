@@ -84,6 +84,33 @@ pub struct Structure {
     /// `F` itself while the drive pushes the motion, and the solve trades `mu` against the
     /// inertia and friction (stranger rigs: `mu` 0.99, the inertia at its floor).
     pub load: f64,
+    /// Localized friction: a bump of dry friction at this site (fixed, chosen by the caller),
+    /// its amplitude fitted by the sliding least squares as the coefficient of
+    /// `sign(v) kernel(x)`; `None`: no bump.
+    pub bump: Option<BumpSite>,
+}
+
+/// Where a bump of dry friction sits: `b(x) = A (1 - s^2)^2` for `|s| < 1`,
+/// `s = (x - center) / half_width` (the model's [`LocalFriction::Bump`] kernel).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BumpSite {
+    /// Centre [m or rad].
+    pub center: f64,
+    /// Half-width of the support [m or rad] (> 0).
+    pub half_width: f64,
+}
+
+impl BumpSite {
+    /// The kernel `(1 - s^2)^2` at `x` (0 outside the support) [1].
+    pub fn kernel(&self, x: f64) -> f64 {
+        let s = (x - self.center) / self.half_width;
+        if s.abs() < 1.0 {
+            let w = 1.0 - s * s;
+            w * w
+        } else {
+            0.0
+        }
+    }
 }
 
 /// Something the estimator had to decide that the report must say.
@@ -324,6 +351,9 @@ pub fn estimate(
             let f = applied_input(&p.run.u, i, &s);
             f - ls.stiffness * restoring_shape(motion, p.run.x[i], center) + ls.offset - s.load * f
         };
+        // the bump's share of the force withstood where an onset rests
+        let bump_at =
+            |p: &Prepared, i: usize| s.bump.map_or(0.0, |site| ls.bump * site.kernel(p.run.x[i]));
         first_motion = [Vec::new(), Vec::new()];
         let mut onsets: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
         for p in fit {
@@ -334,14 +364,14 @@ pub fn estimate(
                 if p.v.iter().take(3).all(|v| v.abs() <= th.v_move) {
                     if let Some(&(i, _)) = m.first() {
                         let o = onset(p, i, sg);
-                        first_motion[dir.index()].push(sg * net(p, o));
+                        first_motion[dir.index()].push(sg * net(p, o) - bump_at(p, o));
                     }
                 }
                 // every onset after at least 3 samples at rest
                 for &(i, _) in &m {
                     if i >= 3 && p.v[i - 3..i].iter().all(|v| v.abs() <= th.v_move) {
                         let o = onset(p, i, sg);
-                        onsets[dir.index()].push(sg * net(p, o));
+                        onsets[dir.index()].push(sg * net(p, o) - bump_at(p, o));
                     }
                 }
             }
@@ -446,7 +476,14 @@ pub fn estimate(
         max: f64::INFINITY,
         stribeck_velocity: 0.0,
         load_friction: s.load,
-        local_friction: LocalFriction::None,
+        local_friction: match s.bump {
+            Some(site) => LocalFriction::Bump {
+                center: site.center,
+                half_width: site.half_width,
+                amplitude: ls.bump,
+            },
+            None => LocalFriction::None,
+        },
     };
     Ok(Estimate {
         params,
@@ -468,6 +505,8 @@ struct LsFit {
     offset: f64,
     kin: [f64; 2],
     visc: [f64; 2],
+    /// Amplitude of the bump (0 without [`Structure::bump`]).
+    bump: f64,
     flags: Vec<Flag>,
 }
 
@@ -508,6 +547,14 @@ fn ls_pass(
     if s.offset && both {
         cols.push((Col::Offset, vec![1.0; rows.len()]));
     }
+    if let Some(site) = s.bump {
+        cols.push((
+            Col::Bump,
+            rows.iter()
+                .map(|r| r.3.signum() * site.kernel(r.4))
+                .collect(),
+        ));
+    }
 
     let y: Vec<f64> = rows
         .iter()
@@ -525,7 +572,7 @@ fn ls_pass(
         .iter()
         .map(|(c, _)| match c {
             Col::Inertia => Some(floor),
-            Col::Offset => None,
+            Col::Offset | Col::Bump => None,
             _ => Some(0.0),
         })
         .collect();
@@ -549,6 +596,7 @@ fn ls_pass(
     }
     // the column of ones carries `-offset` (the offset is on the applied side)
     let offset = get(Col::Offset).map_or(0.0, |g| -g.0);
+    let bump = get(Col::Bump).map_or(0.0, |g| g.0);
 
     let mut at_zero = |c: Col, name: Coefficient| -> f64 {
         match get(c) {
@@ -582,6 +630,7 @@ fn ls_pass(
         offset,
         kin: fixed_kinetic.unwrap_or(kin),
         visc,
+        bump,
         flags,
     })
 }
@@ -597,6 +646,7 @@ enum Col {
     ViscousNeg,
     ViscousSym,
     Offset,
+    Bump,
 }
 
 /// Least squares with lower bounds by an active set: the most violating coefficient is fixed

@@ -20,6 +20,7 @@
 pub mod cause;
 pub mod estimate;
 pub mod grid;
+pub mod local;
 pub mod plots;
 pub mod prep;
 pub mod refine;

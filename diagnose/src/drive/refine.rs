@@ -177,6 +177,7 @@ mod tests {
                 delay: 0,
                 saturation: 0.0,
                 load: 0.0,
+                bump: None,
             },
             flags: Vec::new(),
             first_motion: [Vec::new(), Vec::new()],

@@ -1,7 +1,7 @@
 //! Stage 4: the baseline, the candidate causes, forward selection, and the report.
 
 use super::cause::DRIVE_CAUSES;
-use super::estimate::{estimate, Dir, DryLevel, Estimate, Flag, Structure};
+use super::estimate::{estimate, BumpSite, Dir, DryLevel, Estimate, Flag, Structure};
 use super::prep::{moves, DriveRun, Prepared, Thresholds};
 use super::score::{nmae_no_motion, run_nmae, score, simulate, Scored};
 use crate::report::nmae_or_diverged::text as pct;
@@ -162,6 +162,7 @@ pub fn diagnose_drive(
         delay: 0,
         saturation: 0.0,
         load: 0.0,
+        bump: None,
     };
     // too few sliding samples or a singular least squares is the data's limit (an input
     // error naming it), a failed simulation the model's
@@ -214,6 +215,7 @@ pub fn diagnose_drive(
         sat_grid: &sat_grid,
         delay_grid: &super::grid::delay_grid(dt, shortest),
         dt,
+        bump_guess: &|e: &Estimate| super::local::guess(e, &fit, &th, info.motion).map(|g| g.0),
     };
     let mut current = baseline.clone();
     let mut used: Vec<Cause> = Vec::new();
@@ -788,6 +790,8 @@ struct Search<'a> {
     delay_grid: &'a [usize],
     /// The fitting runs' sample period [s] (the shortest, if they differ).
     dt: f64,
+    /// The peak of a model's binned sliding residual ([`super::local::guess`]).
+    bump_guess: &'a dyn Fn(&Estimate) -> Option<BumpSite>,
 }
 
 /// The saturation levels tried: [`SATURATION_QUANTILES`] of |input| over the fitting runs'
@@ -914,6 +918,24 @@ fn try_cause(
                 )
             });
             (search.score_est)(b.value).ok().map(|r| (r, edge))
+        }
+        Cause::LocalizedFriction if s.bump.is_none() => {
+            // the sites around the peak of the binned sliding residual, each with its
+            // amplitude by least squares, chosen by the fitting runs' simulation
+            let g = (search.bump_guess)(&current.est)?;
+            let best = super::local::sites(g)
+                .into_iter()
+                .filter_map(|site| {
+                    let est = (search.fit_only)(Structure {
+                        bump: Some(site),
+                        ..s
+                    })
+                    .ok()?;
+                    let e = fit_error(&est);
+                    e.is_finite().then_some((est, e))
+                })
+                .min_by(|a, b| a.1.total_cmp(&b.1))?;
+            (search.score_est)(best.0).ok().map(|r| (r, None))
         }
         Cause::InputDelay if s.delay == 0 && !search.delay_grid.is_empty() => {
             let grid = search.delay_grid;
@@ -1087,8 +1109,22 @@ fn physical(
                 )
             }
         }
-        // crane-only causes are never tried on a drive
-        Cause::LocalizedFriction | Cause::PayloadMass => (false, None),
+        Cause::LocalizedFriction => {
+            let a = bump_amplitude(p);
+            let lowest = p.kinetic_pos.min(p.kinetic_neg);
+            if a > 0.0 || (a < 0.0 && lowest + a >= 0.0) {
+                (true, None)
+            } else {
+                (
+                    false,
+                    Some(format!(
+                        "localized_friction: the fitted amplitude {a:.4} is no bump (0, or a dip deeper than the sliding friction {lowest:.4})"
+                    )),
+                )
+            }
+        }
+        // a crane-only cause is never tried on a drive
+        Cause::PayloadMass => (false, None),
     }
 }
 
@@ -1191,7 +1227,19 @@ fn cause_parameters(cause: Cause, est: &Estimate, dt: f64) -> BTreeMap<String, f
         Cause::LoadDependentFriction => {
             m.insert("mu".into(), p.load_friction);
         }
-        Cause::LocalizedFriction | Cause::PayloadMass => {}
+        Cause::LocalizedFriction => {
+            if let crane_model::drive::LocalFriction::Bump {
+                center,
+                half_width,
+                amplitude,
+            } = p.local_friction
+            {
+                m.insert("center_m".into(), center);
+                m.insert("width_m".into(), half_width);
+                m.insert("amplitude_n".into(), amplitude);
+            }
+        }
+        Cause::PayloadMass => {}
     }
     m
 }
@@ -1215,6 +1263,14 @@ fn final_model(est: &Estimate, info: &DriveInfo, flags: &[String], dt: f64) -> F
         delay_samples: est.structure.delay,
         delay_s: est.structure.delay as f64 * dt,
         load_friction: p.load_friction,
+        bump: match p.local_friction {
+            crane_model::drive::LocalFriction::Bump {
+                center,
+                half_width,
+                amplitude,
+            } => Some([center, half_width, amplitude]),
+            crane_model::drive::LocalFriction::None => None,
+        },
         saturation: (est.structure.saturation > 0.0).then_some(est.structure.saturation),
         breakaway_scatter_pos: est.breakaway_scatter[0].unwrap_or(0.0),
         breakaway_scatter_neg: est.breakaway_scatter[1].unwrap_or(0.0),
@@ -1272,5 +1328,13 @@ fn force_rel(est: &Estimate, runs: &[&Prepared], th: &Thresholds) -> f64 {
         0.0
     } else {
         100.0 * (sse / ssf).sqrt()
+    }
+}
+
+/// The amplitude of a model's friction bump (0 without one) [force units].
+fn bump_amplitude(p: &crane_model::drive::DriveParams) -> f64 {
+    match p.local_friction {
+        crane_model::drive::LocalFriction::Bump { amplitude, .. } => amplitude,
+        crane_model::drive::LocalFriction::None => 0.0,
     }
 }
