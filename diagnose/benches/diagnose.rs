@@ -1,0 +1,96 @@
+//! Wall time of whole single-axis diagnoses (issue 20's speed figures; one thread):
+//! - `cicese_joint1`: the real direct-drive arm, joint 1 (`examples/cicese_joint1`, read from
+//!   `../shared`; skipped with a line when absent). Goal: under 5 s.
+//! - `long_10khz_120s`: a 10 kHz x 120 s log (two 60 s runs of pulses, 1.2 M rows, 1 um
+//!   encoder) of a carriage with Coulomb and viscous friction, written as CSV and diagnosed
+//!   from the files (load included). Goal: under 60 s.
+//!
+//! `cargo bench -p crane-diagnose --bench diagnose` (10 samples each: about 1 and 7
+//! minutes). Measured 2026-11-27 on this 2-core machine, idle: `cicese_joint1` 0.641 s,
+//! `long_10khz_120s` 38.6 s; both goals met.
+
+use crane_diagnose::{diagnose, DiagnoseOptions};
+use crane_model::{Drive, DriveParams};
+use criterion::{criterion_group, criterion_main, Criterion};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+/// Two 60 s runs at 10 kHz: pulses of both signs (8-20 N, 0.4 s on, 0.3 s off) on a 2 kg
+/// carriage (Coulomb 4 N, viscous 8 N s/m), positions quantised to 1 um; the second run
+/// held out.
+fn write_long_log(dir: &Path) -> std::io::Result<()> {
+    std::fs::create_dir_all(dir)?;
+    let p = DriveParams {
+        inertia: 2.0,
+        kinetic_pos: 4.0,
+        kinetic_neg: 4.0,
+        breakaway_pos: 4.0,
+        breakaway_neg: 4.0,
+        viscous_pos: 8.0,
+        viscous_neg: 8.0,
+        ..DriveParams::default()
+    };
+    let dt = 1e-4;
+    let mut toml = String::from("position_unit = \"m\"\ninput_unit = \"N\"\n");
+    let mut seed = 0x2545_f491_4f6c_dd1du64;
+    for run in 0..2 {
+        let name = format!("run{run}.csv");
+        toml.push_str(&format!(
+            "[[runs]]\nfile = \"{name}\"\nkind = \"{}\"\n",
+            if run == 1 { "validation" } else { "other" }
+        ));
+        let mut d =
+            Drive::<f64>::new(&p, dt, 0.0).map_err(|e| std::io::Error::other(format!("{e:?}")))?;
+        let mut f = std::io::BufWriter::new(std::fs::File::create(dir.join(&name))?);
+        writeln!(f, "t,x,u")?;
+        let (mut u, mut left) = (0.0, 0usize);
+        for k in 0..600_000usize {
+            if left == 0 {
+                seed ^= seed << 13;
+                seed ^= seed >> 7;
+                seed ^= seed << 17;
+                let r = (seed >> 11) as f64 / (1u64 << 53) as f64;
+                u = if u != 0.0 {
+                    0.0
+                } else {
+                    let a = 8.0 + 12.0 * r;
+                    if (seed >> 3) & 1 == 0 {
+                        a
+                    } else {
+                        -a
+                    }
+                };
+                left = if u != 0.0 { 4000 } else { 3000 };
+            }
+            left -= 1;
+            let x = (d.x() / 1e-6).round() * 1e-6;
+            writeln!(f, "{},{x},{u}", k as f64 * dt)?;
+            d.step(u)
+                .map_err(|e| std::io::Error::other(format!("{e:?}")))?;
+        }
+    }
+    std::fs::write(dir.join("dataset.toml"), toml)
+}
+
+fn bench(c: &mut Criterion) {
+    let mut g = c.benchmark_group("diagnose");
+    g.sample_size(10).measurement_time(Duration::from_secs(60));
+    let cicese = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/cicese_joint1");
+    if crane_ident::shared_data::require("cicese").is_some() {
+        g.bench_function("cicese_joint1", |b| {
+            b.iter(|| diagnose(&cicese, &DiagnoseOptions::default()).expect("report"))
+        });
+    }
+    let dir: PathBuf =
+        std::env::temp_dir().join(format!("crane_bench_10khz_{}", std::process::id()));
+    write_long_log(&dir).expect("the long log is written");
+    g.bench_function("long_10khz_120s", |b| {
+        b.iter(|| diagnose(&dir, &DiagnoseOptions::default()).expect("report"))
+    });
+    g.finish();
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
