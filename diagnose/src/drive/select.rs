@@ -247,22 +247,7 @@ pub fn diagnose_drive(
         .max()
         .unwrap_or(1)
         .max(1);
-    let range_mean = held
-        .iter()
-        .map(|r| {
-            let (lo, hi) = r
-                .run
-                .x
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
-                    (l.min(x), h.max(x))
-                });
-            (hi - lo).max(th.quantum)
-        })
-        .sum::<f64>()
-        / held.len() as f64;
-    // the held-out NMAE of the encoder's own error: half a count over the mean range [%]
-    let noise_floor = 100.0 * 0.5 * th.quantum / range_mean;
+    let noise_floor = noise_floor(&held, &th);
     for _round in 0..DRIVE_CAUSES.len() {
         if too_thin || unseen.is_some() {
             break;
@@ -655,6 +640,26 @@ pub fn diagnose_drive(
     })
 }
 
+/// The held-out NMAE of the encoder's own error: half a count over the held-out runs' mean
+/// position range (each floored at a count) [%].
+fn noise_floor(held: &[&Prepared], th: &Thresholds) -> f64 {
+    let range_mean = held
+        .iter()
+        .map(|r| {
+            let (lo, hi) = r
+                .run
+                .x
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
+                    (l.min(x), h.max(x))
+                });
+            (hi - lo).max(th.quantum)
+        })
+        .sum::<f64>()
+        / held.len() as f64;
+    100.0 * 0.5 * th.quantum / range_mean
+}
+
 /// The error when the fitting runs never move: which held-out runs do, and how to hold out
 /// others (the default split holds out every second run, which can put every moving run on
 /// the held-out side).
@@ -833,6 +838,13 @@ fn try_cause(
     let (fit_and_score, fit_error, umax) = (search.fit_and_score, search.fit_error, search.umax);
     let s = current.est.structure;
     let one = |s: Structure| fit_and_score(s).ok().map(|r| (r, None));
+    // a structure fitted on the fitting runs, with its simulated error there (the measure
+    // every grid-searched value is chosen by)
+    let fitted = |st: Structure| -> Option<(Estimate, f64)> {
+        let est = (search.fit_only)(st).ok()?;
+        let e = fit_error(&est);
+        Some((est, e))
+    };
     match cause {
         Cause::RestoringForce if !s.restoring => one(Structure {
             restoring: true,
@@ -852,9 +864,7 @@ fn try_cause(
             // honestly chosen value (choosing on them would select on the test set)
             let grid: Vec<f64> = DEADBAND_GRID.iter().map(|f| f * umax).collect();
             let b = super::grid::continuous(&grid, GRID_REFINE, |d| {
-                let est = (search.fit_only)(Structure { deadband: d, ..s }).ok()?;
-                let e = fit_error(&est);
-                Some((est, e))
+                fitted(Structure { deadband: d, ..s })
             })?;
             let edge = b.at_edge(&grid, true).then(|| {
                 format!(
@@ -880,13 +890,10 @@ fn try_cause(
             // chosen model is scored on the held-out runs
             let grid = search.sat_grid;
             let b = super::grid::continuous(grid, GRID_REFINE, |level| {
-                let est = (search.fit_only)(Structure {
+                fitted(Structure {
                     saturation: level,
                     ..s
                 })
-                .ok()?;
-                let e = fit_error(&est);
-                Some((est, e))
             })?;
             let edge = b.at_edge(grid, true).then(|| {
                 format!(
@@ -902,9 +909,7 @@ fn try_cause(
             // chosen on the fitting runs' simulation, like the dead band: a least squares of
             // `mu` against the effort it multiplies trades it for the inertia and gain
             let b = super::grid::continuous(&LOAD_GRID, GRID_REFINE, |mu| {
-                let est = (search.fit_only)(Structure { load: mu, ..s }).ok()?;
-                let e = fit_error(&est);
-                Some((est, e))
+                fitted(Structure { load: mu, ..s })
             })?;
             let edge = b.at_edge(&LOAD_GRID, true).then(|| {
                 format!(
@@ -926,24 +931,18 @@ fn try_cause(
             let best = super::local::sites(g)
                 .into_iter()
                 .filter_map(|site| {
-                    let est = (search.fit_only)(Structure {
+                    fitted(Structure {
                         bump: Some(site),
                         ..s
                     })
-                    .ok()?;
-                    let e = fit_error(&est);
-                    e.is_finite().then_some((est, e))
+                    .filter(|(_, e)| e.is_finite())
                 })
                 .min_by(|a, b| a.1.total_cmp(&b.1))?;
             (search.score_est)(best.0).ok().map(|r| (r, None))
         }
         Cause::InputDelay if s.delay == 0 && !search.delay_grid.is_empty() => {
             let grid = search.delay_grid;
-            let b = super::grid::integer(grid, |d| {
-                let est = (search.fit_only)(Structure { delay: d, ..s }).ok()?;
-                let e = fit_error(&est);
-                Some((est, e))
-            })?;
+            let b = super::grid::integer(grid, |d| fitted(Structure { delay: d, ..s }))?;
             let edge = b.at_edge(grid, false).then(|| {
                 format!(
                     "delay at the largest value tried ({} samples, {:.4} s; grid edge)",
