@@ -90,8 +90,8 @@ case "$fmu_target" in /*) ;; *) fmu_target="$PWD/$fmu_target" ;; esac
 bash scripts/build-fmu.sh "$fmu_target/crane.fmu"
 cargo build --release --bin crane
 ensure_venv "fmpy>=0.3.32,<0.4" pytest
-CRANE_FMU="$fmu_target/crane.fmu" CRANE_BIN="$fmu_target/release/crane" \
-  "$VENV_PY" -m pytest -q -p no:cacheprovider fmu/tests/test_fmu.py
+# (its pytest runs after the python block: the FMU with stiction and the tanh law is compared
+# bit for bit with `crane_twin`, which is installed there)
 # ---- end FMU ------------------------------------------------------------------------------
 
 # ---- python (issue 12): the `crane_twin` package in the shared venv, then its pytest -------
@@ -112,6 +112,9 @@ PATH="$venv/bin:$PATH" "$venv/bin/python" -m pip install -q --disable-pip-versio
   --no-build-isolation ./python
 CRANE_BIN="$fmu_target/release/crane" RAY_USAGE_STATS_ENABLED=0 \
   "$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests
+step "FMU: FMPy + pytest (against crane simulate and crane_twin)"
+CRANE_FMU="$fmu_target/crane.fmu" CRANE_BIN="$fmu_target/release/crane" \
+  "$VENV_PY" -m pytest -q -p no:cacheprovider fmu/tests/test_fmu.py
 # ---- end python ----------------------------------------------------------------------------
 
 # ---- scipy peer (issue 15): tools/scripts/scipy_peer.py's physics and event loop, in the

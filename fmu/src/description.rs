@@ -48,7 +48,7 @@ fn body(guid: &str) -> String {
     );
     let _ = writeln!(
         x,
-        r#"  <CoSimulation modelIdentifier="{MODEL_IDENTIFIER}" needsExecutionTool="false" canHandleVariableCommunicationStepSize="false" canInterpolateInputs="false" maxOutputDerivativeOrder="0" canRunAsynchronuously="false" canBeInstantiatedOnlyOncePerProcess="false" canNotUseMemoryManagementFunctions="true" canGetAndSetFMUstate="false" canSerializeFMUstate="false" providesDirectionalDerivative="false"/>"#
+        r#"  <CoSimulation modelIdentifier="{MODEL_IDENTIFIER}" needsExecutionTool="false" canHandleVariableCommunicationStepSize="false" canInterpolateInputs="false" maxOutputDerivativeOrder="0" canRunAsynchronuously="false" canBeInstantiatedOnlyOncePerProcess="false" canNotUseMemoryManagementFunctions="true" canGetAndSetFMUstate="true" canSerializeFMUstate="true" providesDirectionalDerivative="false"/>"#
     );
     let _ = writeln!(x, "  <UnitDefinitions>");
     for (name, [kg, m, s, a, rad]) in UNITS {
@@ -134,15 +134,35 @@ fn scalar(v: &Variable, s: &Settings) -> String {
         .unit
         .map(|u| format!(r#" unit="{}""#, esc(u)))
         .unwrap_or_default();
+    let range = bounds(v);
     let ty = match v.kind {
-        Kind::Real => format!("<Real{unit}{start_attr}/>"),
-        Kind::Integer => format!("<Integer{start_attr}/>"),
+        Kind::Real => format!("<Real{unit}{range}{start_attr}/>"),
+        Kind::Integer => format!("<Integer{range}{start_attr}/>"),
     };
     format!("{head}{ty}</ScalarVariable>")
 }
 
-/// FNV-1a, 64 bit: a stable hash for the GUID (no cryptographic need).
-fn fnv1a(bytes: &[u8]) -> u64 {
+/// The `min` and `max` attributes of a variable's declared range (empty when unbounded).
+/// Reals print as Rust's `{:?}`: the shortest text that reads back to the same bits, in
+/// exponent form for tiny values (`5e-324`).
+fn bounds(v: &Variable) -> String {
+    let text = |x: f64| match v.kind {
+        Kind::Real => format!("{x:?}"),
+        Kind::Integer => format!("{}", x as i64),
+    };
+    let mut a = String::new();
+    if let Some(x) = v.range.min {
+        let _ = write!(a, r#" min="{}""#, text(x));
+    }
+    if let Some(x) = v.range.max {
+        let _ = write!(a, r#" max="{}""#, text(x));
+    }
+    a
+}
+
+/// FNV-1a, 64 bit: a stable hash for the GUID and the checksum of a serialized FMU state
+/// (no cryptographic need).
+pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     for b in bytes {
         h ^= u64::from(*b);
@@ -195,28 +215,44 @@ communication step must be a whole multiple of it (relative tolerance 1e-9), oth
 the communication step (zero-order hold) and saturated to &plusmn;12 V. Parameters are \
 validated at <code>fmi2ExitInitializationMode</code>; an invalid one gives \
 <code>fmi2Error</code> and a log message naming it. Tunable parameters may change between \
-steps (checked at once). No FMU state get/set or serialisation, no directional derivatives.</p>\n\
+steps (checked at once). Bounded parameters declare <code>min</code>/<code>max</code>: the \
+range the model checks (a strict <code>&gt; 0</code> is <code>min=\"5e-324\"</code>, the \
+smallest positive double).</p>\n\
+<p>Friction options, as the Python package <code>crane_twin</code> offers them: \
+<code>config.law.kind</code> 0 is the hybrid automaton (exact sticking), 1 the smooth \
+<code>tanh</code> law with slope <code>config.law.gamma</code>; \
+<code>stiction[i].ratio</code> (breakaway over sliding friction, 1 = none) and \
+<code>stiction[i].velocity</code> (Stribeck velocity) per drive axis (0 X, 1 Y, 2 rope).</p>\n\
+<p>FMU state: <code>fmi2GetFMUstate</code>/<code>fmi2SetFMUstate</code> and serialisation \
+are supported; a state holds every parameter, the inputs, the time, the simulator's state \
+and modes and the last applied input, so a simulation continued from it gives the same \
+bits. A serialized state carries a header (magic, format version, length, GUID) and a \
+checksum; a corrupt one is refused with <code>fmi2Error</code>. No directional \
+derivatives.</p>\n\
 <p>Positions: X rail, Y trolley, rope length L (positive velocity lowers the payload), swing \
 angles alpha (pi/2 hanging straight down) and beta. Modes: -1 moving negative, 0 stopped \
 (exact sticking, friction holds), 1 moving positive.</p>"
     );
     let _ = writeln!(
         h,
-        "<table border=\"1\"><tr><th>name</th><th>causality</th><th>variability</th><th>type</th><th>unit</th><th>start</th><th>description</th></tr>"
+        "<table border=\"1\"><tr><th>name</th><th>causality</th><th>variability</th><th>type</th><th>unit</th><th>start</th><th>min</th><th>max</th><th>description</th></tr>"
     );
     for v in &vars {
         let start = variables::start(&s, v.slot)
             .map(|x| format!("{x}"))
             .unwrap_or_default();
+        let bound = |b: Option<f64>| b.map(|x| format!("{x:?}")).unwrap_or_default();
         let _ = writeln!(
             h,
-            "<tr><td><code>{}</code></td><td>{}</td><td>{}</td><td>{:?}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            "<tr><td><code>{}</code></td><td>{}</td><td>{}</td><td>{:?}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
             esc(v.name),
             causality(v.causality),
             variability(v.variability),
             v.kind,
             esc(v.unit.unwrap_or("")),
             start,
+            bound(v.range.min),
+            bound(v.range.max),
             esc(v.description)
         );
     }
@@ -236,7 +272,12 @@ mod tests {
         assert!(xml.contains(&format!("guid=\"{}\"", guid())));
         // Start values read back to the defaults' bits.
         assert!(xml.contains(r#"name="x.viscous_neg""#));
-        assert!(xml.contains(r#"<Real unit="N.s/m" start="101.44"/>"#));
+        assert!(xml.contains(r#"<Real unit="N.s/m" min="0.0" start="101.44"/>"#));
+        // Declared ranges: > 0 as the smallest positive double, integers as integers.
+        assert!(xml.contains(r#"<Real unit="kg" min="5e-324" start="0.457"/>"#));
+        assert!(xml.contains(r#"<Integer min="1" max="8" start="8"/>"#));
+        assert!(xml.contains(r#"<Real unit="1" min="1.0" start="1"/>"#));
+        assert!(xml.contains(r#"canGetAndSetFMUstate="true" canSerializeFMUstate="true""#));
         assert!(xml.contains(r#"start="1.5707963267948966""#));
     }
 }

@@ -7,18 +7,22 @@
 //!
 //! Rules every function follows:
 //! - its body runs inside [`guard`] (`std::panic::catch_unwind`): a panic becomes
-//!   `fmi2Fatal` (the instance is marked failed), it never unwinds into the importer;
+//!   `fmi2Fatal` (the instance is marked failed), it never unwinds into the importer; the
+//!   functions that take an instance are written with the one macro `entry!`, which holds
+//!   the call of `guard` and its `// SAFETY:` comment;
 //! - null pointers are checked before use (`fmi2Error`);
 //! - the logic lives in safe Rust ([`Instance`]); this file only converts pointers to slices
 //!   and results to statuses, logging every failure through the importer's logger.
 //!
 //! Memory: the instance is a `Box` from Rust's allocator (the description declares
-//! `canNotUseMemoryManagementFunctions="true"`), freed by `fmi2FreeInstance`.
+//! `canNotUseMemoryManagementFunctions="true"`), freed by `fmi2FreeInstance`; so is an FMU
+//! state (`fmi2GetFMUstate`, `fmi2DeSerializeFMUstate`), freed by `fmi2FreeFMUstate`.
 
 #![allow(non_snake_case, non_camel_case_types)]
 
 use crate::description::{guid, MODEL_IDENTIFIER};
 use crate::instance::{Failure, Instance, Phase, Status};
+use crate::snapshot::Snapshot;
 use std::ffi::{c_char, c_int, c_void, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -41,7 +45,8 @@ pub const FMI2_COSIMULATION: c_int = 1;
 pub type fmi2Component = *mut c_void;
 /// `fmi2ComponentEnvironment`: the importer's pointer, passed back to the logger.
 pub type fmi2ComponentEnvironment = *mut c_void;
-/// `fmi2FMUstate` (not supported).
+/// `fmi2FMUstate`: an opaque pointer to a [`Snapshot`] (from `fmi2GetFMUstate` or
+/// `fmi2DeSerializeFMUstate`, freed by `fmi2FreeFMUstate`).
 pub type fmi2FMUstate = *mut c_void;
 /// `fmi2ValueReference`.
 pub type fmi2ValueReference = u32;
@@ -328,458 +333,493 @@ pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
     });
 }
 
-/// `fmi2SetDebugLogging`: switches non-error messages on or off (categories are ignored).
-///
-/// # Safety
-/// See [`guard`].
-#[no_mangle]
-pub unsafe extern "C" fn fmi2SetDebugLogging(
-    c: fmi2Component,
-    logging_on: fmi2Boolean,
-    _n_categories: usize,
-    _categories: *const fmi2String,
-) -> fmi2Status {
-    // SAFETY: `c` per this function's contract.
-    unsafe {
-        guard(c, |fmu| {
-            fmu.logging_on = logging_on != 0;
-            FMI2_OK
-        })
-    }
-}
-
-/// `fmi2SetupExperiment`: the start time; tolerance and stop time are not used.
-///
-/// # Safety
-/// See [`guard`].
-#[no_mangle]
-pub unsafe extern "C" fn fmi2SetupExperiment(
-    c: fmi2Component,
-    _tolerance_defined: fmi2Boolean,
-    _tolerance: fmi2Real,
-    start_time: fmi2Real,
-    _stop_time_defined: fmi2Boolean,
-    _stop_time: fmi2Real,
-) -> fmi2Status {
-    // SAFETY: `c` per this function's contract.
-    unsafe {
-        guard(c, |fmu| {
-            let r = fmu.instance.setup_experiment(start_time);
-            fmu.report(r)
-        })
-    }
-}
-
-/// `fmi2EnterInitializationMode`.
-///
-/// # Safety
-/// See [`guard`].
-#[no_mangle]
-pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
-    // SAFETY: `c` per this function's contract.
-    unsafe {
-        guard(c, |fmu| {
-            let r = fmu.instance.enter_initialization();
-            fmu.report(r)
-        })
-    }
-}
-
-/// `fmi2ExitInitializationMode`: validates parameters and initial state (the model's error
-/// text goes to the logger).
-///
-/// # Safety
-/// See [`guard`].
-#[no_mangle]
-pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
-    // SAFETY: `c` per this function's contract.
-    unsafe {
-        guard(c, |fmu| {
-            let r = fmu.instance.exit_initialization();
-            fmu.report(r)
-        })
-    }
-}
-
-/// `fmi2Terminate`.
-///
-/// # Safety
-/// See [`guard`].
-#[no_mangle]
-pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
-    // SAFETY: `c` per this function's contract.
-    unsafe {
-        guard(c, |fmu| {
-            let r = fmu.instance.terminate();
-            fmu.report(r)
-        })
-    }
-}
-
-/// `fmi2Reset`: back to the state after instantiation, start values restored.
-///
-/// # Safety
-/// See [`guard`].
-#[no_mangle]
-pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
-    // SAFETY: `c` per this function's contract.
-    unsafe {
-        guard(c, |fmu| {
-            fmu.instance.reset();
-            FMI2_OK
-        })
-    }
-}
-
-/// `fmi2GetReal`.
-///
-/// # Safety
-/// See [`guard`]; `vr` and `value` are null or valid for `nvr` elements.
-#[no_mangle]
-pub unsafe extern "C" fn fmi2GetReal(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *mut fmi2Real,
-) -> fmi2Status {
-    // SAFETY: `c` per this function's contract.
-    unsafe {
-        guard(c, |fmu| {
-            // SAFETY: valid for `nvr` elements per this function's contract.
-            let (Some(vr), Some(out)) = (slice(vr, nvr), slice_mut(value, nvr)) else {
-                return null_argument(fmu, "fmi2GetReal");
-            };
-            {
-                let r = fmu.instance.get_real(vr, out);
-                fmu.report(r)
-            }
-        })
-    }
-}
-
-/// `fmi2GetInteger`.
-///
-/// # Safety
-/// See [`fmi2GetReal`].
-#[no_mangle]
-pub unsafe extern "C" fn fmi2GetInteger(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *mut fmi2Integer,
-) -> fmi2Status {
-    // SAFETY: `c` per this function's contract.
-    unsafe {
-        guard(c, |fmu| {
-            // SAFETY: valid for `nvr` elements per this function's contract.
-            let (Some(vr), Some(out)) = (slice(vr, nvr), slice_mut(value, nvr)) else {
-                return null_argument(fmu, "fmi2GetInteger");
-            };
-            {
-                let r = fmu.instance.get_integer(vr, out);
-                fmu.report(r)
-            }
-        })
-    }
-}
-
-/// `fmi2GetBoolean`: the FMU has no Boolean variables, so any value reference is an error.
-///
-/// # Safety
-/// See [`fmi2GetReal`].
-#[no_mangle]
-pub unsafe extern "C" fn fmi2GetBoolean(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *mut fmi2Boolean,
-) -> fmi2Status {
-    // SAFETY: `c` per this function's contract.
-    unsafe {
-        guard(c, |fmu| {
-            // SAFETY: valid for `nvr` elements per this function's contract.
-            let (Some(vr), Some(_)) = (slice(vr, nvr), slice_mut(value, nvr)) else {
-                return null_argument(fmu, "fmi2GetBoolean");
-            };
-            no_variable_of(fmu, "Boolean", vr)
-        })
-    }
-}
-
-/// `fmi2GetString`: no String variables (any value reference is an error).
-///
-/// # Safety
-/// See [`fmi2GetReal`].
-#[no_mangle]
-pub unsafe extern "C" fn fmi2GetString(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *mut fmi2String,
-) -> fmi2Status {
-    // SAFETY: `c` per this function's contract.
-    unsafe {
-        guard(c, |fmu| {
-            // SAFETY: valid for `nvr` elements per this function's contract.
-            let (Some(vr), Some(_)) = (slice(vr, nvr), slice_mut(value, nvr)) else {
-                return null_argument(fmu, "fmi2GetString");
-            };
-            no_variable_of(fmu, "String", vr)
-        })
-    }
-}
-
-/// `fmi2SetReal`: inputs and parameters (see `Instance::set_real`).
-///
-/// # Safety
-/// See [`guard`]; `vr` and `value` are null or valid for `nvr` elements.
-#[no_mangle]
-pub unsafe extern "C" fn fmi2SetReal(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *const fmi2Real,
-) -> fmi2Status {
-    // SAFETY: `c` per this function's contract.
-    unsafe {
-        guard(c, |fmu| {
-            // SAFETY: valid for `nvr` elements per this function's contract.
-            let (Some(vr), Some(v)) = (slice(vr, nvr), slice(value, nvr)) else {
-                return null_argument(fmu, "fmi2SetReal");
-            };
-            {
-                let r = fmu.instance.set_real(vr, v);
-                fmu.report(r)
-            }
-        })
-    }
-}
-
-/// `fmi2SetInteger`: the segment budget.
-///
-/// # Safety
-/// See [`fmi2SetReal`].
-#[no_mangle]
-pub unsafe extern "C" fn fmi2SetInteger(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *const fmi2Integer,
-) -> fmi2Status {
-    // SAFETY: `c` per this function's contract.
-    unsafe {
-        guard(c, |fmu| {
-            // SAFETY: valid for `nvr` elements per this function's contract.
-            let (Some(vr), Some(v)) = (slice(vr, nvr), slice(value, nvr)) else {
-                return null_argument(fmu, "fmi2SetInteger");
-            };
-            {
-                let r = fmu.instance.set_integer(vr, v);
-                fmu.report(r)
-            }
-        })
-    }
-}
-
-/// `fmi2SetBoolean`: no Boolean variables (any value reference is an error).
-///
-/// # Safety
-/// See [`fmi2SetReal`].
-#[no_mangle]
-pub unsafe extern "C" fn fmi2SetBoolean(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *const fmi2Boolean,
-) -> fmi2Status {
-    // SAFETY: `c` per this function's contract.
-    unsafe {
-        guard(c, |fmu| {
-            // SAFETY: valid for `nvr` elements per this function's contract.
-            let (Some(vr), Some(_)) = (slice(vr, nvr), slice(value, nvr)) else {
-                return null_argument(fmu, "fmi2SetBoolean");
-            };
-            no_variable_of(fmu, "Boolean", vr)
-        })
-    }
-}
-
-/// `fmi2SetString`: no String variables (any value reference is an error).
-///
-/// # Safety
-/// See [`fmi2SetReal`].
-#[no_mangle]
-pub unsafe extern "C" fn fmi2SetString(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *const fmi2String,
-) -> fmi2Status {
-    // SAFETY: `c` per this function's contract.
-    unsafe {
-        guard(c, |fmu| {
-            // SAFETY: valid for `nvr` elements per this function's contract.
-            let (Some(vr), Some(_)) = (slice(vr, nvr), slice(value, nvr)) else {
-                return null_argument(fmu, "fmi2SetString");
-            };
-            no_variable_of(fmu, "String", vr)
-        })
-    }
-}
-
-/// `fmi2DoStep`: `communicationStepSize` must be a whole multiple of `config.h`.
-///
-/// # Safety
-/// See [`guard`].
-#[no_mangle]
-pub unsafe extern "C" fn fmi2DoStep(
-    c: fmi2Component,
-    current_communication_point: fmi2Real,
-    communication_step_size: fmi2Real,
-    _no_set_fmu_state_prior: fmi2Boolean,
-) -> fmi2Status {
-    // SAFETY: `c` per this function's contract.
-    unsafe {
-        guard(c, |fmu| {
-            let r = fmu
-                .instance
-                .do_step(current_communication_point, communication_step_size);
-            fmu.report(r)
-        })
-    }
-}
-
-/// `fmi2CancelStep`: steps are synchronous, there is nothing to cancel.
-///
-/// # Safety
-/// See [`guard`].
-#[no_mangle]
-pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
-    // SAFETY: `c` per this function's contract.
-    unsafe {
-        guard(c, |fmu| {
-            unsupported(fmu, "fmi2CancelStep (steps are synchronous)")
-        })
-    }
-}
-
-/// `fmi2GetStatus` and friends: only meaningful after `fmi2Pending`, which this FMU never
-/// returns; `fmi2Terminated` is answered (true after a failed step).
-///
-/// # Safety
-/// See [`guard`]; `value` null or writable.
-#[no_mangle]
-pub unsafe extern "C" fn fmi2GetStatus(
-    c: fmi2Component,
-    _kind: fmi2StatusKind,
-    _value: *mut fmi2Status,
-) -> fmi2Status {
-    // SAFETY: `c` per this function's contract.
-    unsafe { guard(c, |_| FMI2_DISCARD) }
-}
-
-/// `fmi2GetRealStatus`: `fmi2LastSuccessfulTime` (2) gives the FMU's time.
-///
-/// # Safety
-/// See [`guard`]; `value` null or writable.
-#[no_mangle]
-pub unsafe extern "C" fn fmi2GetRealStatus(
-    c: fmi2Component,
-    kind: fmi2StatusKind,
-    value: *mut fmi2Real,
-) -> fmi2Status {
-    // SAFETY: `c` per this function's contract.
-    unsafe {
-        guard(c, |fmu| {
-            // SAFETY: null or writable for one element per this function's contract.
-            let Some(out) = slice_mut(value, 1) else {
-                return null_argument(fmu, "fmi2GetRealStatus");
-            };
-            if kind == 2 {
-                out[0] = fmu.instance.time();
-                FMI2_OK
-            } else {
-                FMI2_DISCARD
-            }
-        })
-    }
-}
-
-/// `fmi2GetIntegerStatus`: nothing to report.
-///
-/// # Safety
-/// See [`guard`].
-#[no_mangle]
-pub unsafe extern "C" fn fmi2GetIntegerStatus(
-    c: fmi2Component,
-    _kind: fmi2StatusKind,
-    _value: *mut fmi2Integer,
-) -> fmi2Status {
-    // SAFETY: `c` per this function's contract.
-    unsafe { guard(c, |_| FMI2_DISCARD) }
-}
-
-/// `fmi2GetBooleanStatus`: `fmi2Terminated` (3) is true after a failed step.
-///
-/// # Safety
-/// See [`guard`]; `value` null or writable.
-#[no_mangle]
-pub unsafe extern "C" fn fmi2GetBooleanStatus(
-    c: fmi2Component,
-    kind: fmi2StatusKind,
-    value: *mut fmi2Boolean,
-) -> fmi2Status {
-    // SAFETY: `c` per this function's contract.
-    unsafe {
-        guard(c, |fmu| {
-            // SAFETY: null or writable for one element per this function's contract.
-            let Some(out) = slice_mut(value, 1) else {
-                return null_argument(fmu, "fmi2GetBooleanStatus");
-            };
-            if kind == 3 {
-                out[0] = c_int::from(fmu.instance.phase() == Phase::Failed);
-                FMI2_OK
-            } else {
-                FMI2_DISCARD
-            }
-        })
-    }
-}
-
-/// `fmi2GetStringStatus`: nothing to report.
-///
-/// # Safety
-/// See [`guard`].
-#[no_mangle]
-pub unsafe extern "C" fn fmi2GetStringStatus(
-    c: fmi2Component,
-    _kind: fmi2StatusKind,
-    _value: *mut fmi2String,
-) -> fmi2Status {
-    // SAFETY: `c` per this function's contract.
-    unsafe { guard(c, |_| FMI2_DISCARD) }
-}
-
-macro_rules! not_supported {
-    ($name:ident ( $($arg:ident : $ty:ty),* )) => {
-        #[doc = concat!("`", stringify!($name), "`: not supported (capability flag false); `fmi2Error`.")]
-        ///
-        /// # Safety
-        /// See [`guard`].
+/// Defines one `fmi2*` entry point that takes the instance `c` first: the arguments after
+/// `c`, and a body that runs with the instance (`|fmu| ...`, `fmu: &mut Fmu`) inside
+/// [`guard`]. The body is a closure outside the unsafe block, so any unsafe operation in it
+/// needs its own `unsafe` block and `// SAFETY:` comment. The caller's doc comment must
+/// state the function's `# Safety` contract, which includes [`guard`]'s for `c`.
+macro_rules! entry {
+    (
+        $(#[$attr:meta])*
+        fn $name:ident($($arg:tt: $ty:ty),* $(,)?) |$fmu:pat_param| $body:expr
+    ) => {
+        $(#[$attr])*
         #[no_mangle]
-        pub unsafe extern "C" fn $name(c: fmi2Component, $(_: $ty),*) -> fmi2Status {
-            // SAFETY: `c` per this function's contract.
-            unsafe { guard(c, |fmu| unsupported(fmu, stringify!($name))) }
+        pub unsafe extern "C" fn $name(c: fmi2Component, $($arg: $ty),*) -> fmi2Status {
+            let body = |$fmu: &mut Fmu| -> fmi2Status { $body };
+            // SAFETY: `c` is null or a live instance used by one thread at a time, per this
+            // function's contract (which includes `guard`'s).
+            unsafe { guard(c, body) }
         }
     };
 }
 
-not_supported!(fmi2GetFMUstate(state: *mut fmi2FMUstate));
-not_supported!(fmi2SetFMUstate(state: fmi2FMUstate));
-not_supported!(fmi2FreeFMUstate(state: *mut fmi2FMUstate));
-not_supported!(fmi2SerializedFMUstateSize(state: fmi2FMUstate, size: *mut usize));
-not_supported!(fmi2SerializeFMUstate(state: fmi2FMUstate, bytes: *mut fmi2Byte, size: usize));
-not_supported!(fmi2DeSerializeFMUstate(bytes: *const fmi2Byte, size: usize, state: *mut fmi2FMUstate));
+entry! {
+    /// `fmi2SetDebugLogging`: switches non-error messages on or off (categories are ignored).
+    ///
+    /// # Safety
+    /// See [`guard`].
+    fn fmi2SetDebugLogging(
+        logging_on: fmi2Boolean,
+        _n_categories: usize,
+        _categories: *const fmi2String,
+    ) |fmu| {
+        fmu.logging_on = logging_on != 0;
+        FMI2_OK
+    }
+}
+
+entry! {
+    /// `fmi2SetupExperiment`: the start time; tolerance and stop time are not used.
+    ///
+    /// # Safety
+    /// See [`guard`].
+    fn fmi2SetupExperiment(
+        _tolerance_defined: fmi2Boolean,
+        _tolerance: fmi2Real,
+        start_time: fmi2Real,
+        _stop_time_defined: fmi2Boolean,
+        _stop_time: fmi2Real,
+    ) |fmu| {
+        let r = fmu.instance.setup_experiment(start_time);
+        fmu.report(r)
+    }
+}
+
+entry! {
+    /// `fmi2EnterInitializationMode`.
+    ///
+    /// # Safety
+    /// See [`guard`].
+    fn fmi2EnterInitializationMode() |fmu| {
+        let r = fmu.instance.enter_initialization();
+        fmu.report(r)
+    }
+}
+
+entry! {
+    /// `fmi2ExitInitializationMode`: validates parameters and initial state (the model's error
+    /// text goes to the logger).
+    ///
+    /// # Safety
+    /// See [`guard`].
+    fn fmi2ExitInitializationMode() |fmu| {
+        let r = fmu.instance.exit_initialization();
+        fmu.report(r)
+    }
+}
+
+entry! {
+    /// `fmi2Terminate`.
+    ///
+    /// # Safety
+    /// See [`guard`].
+    fn fmi2Terminate() |fmu| {
+        let r = fmu.instance.terminate();
+        fmu.report(r)
+    }
+}
+
+entry! {
+    /// `fmi2Reset`: back to the state after instantiation, start values restored.
+    ///
+    /// # Safety
+    /// See [`guard`].
+    fn fmi2Reset() |fmu| {
+        fmu.instance.reset();
+        FMI2_OK
+    }
+}
+
+entry! {
+    /// `fmi2GetReal`.
+    ///
+    /// # Safety
+    /// See [`guard`]; `vr` and `value` are null or valid for `nvr` elements.
+    fn fmi2GetReal(vr: *const fmi2ValueReference, nvr: usize, value: *mut fmi2Real) |fmu| {
+        // SAFETY: null or valid for `nvr` elements per this function's contract.
+        let (Some(vr), Some(out)) = (unsafe { (slice(vr, nvr), slice_mut(value, nvr)) }) else {
+            return null_argument(fmu, "fmi2GetReal");
+        };
+        let r = fmu.instance.get_real(vr, out);
+        fmu.report(r)
+    }
+}
+
+entry! {
+    /// `fmi2GetInteger`.
+    ///
+    /// # Safety
+    /// See [`fmi2GetReal`].
+    fn fmi2GetInteger(vr: *const fmi2ValueReference, nvr: usize, value: *mut fmi2Integer) |fmu| {
+        // SAFETY: null or valid for `nvr` elements per this function's contract.
+        let (Some(vr), Some(out)) = (unsafe { (slice(vr, nvr), slice_mut(value, nvr)) }) else {
+            return null_argument(fmu, "fmi2GetInteger");
+        };
+        let r = fmu.instance.get_integer(vr, out);
+        fmu.report(r)
+    }
+}
+
+entry! {
+    /// `fmi2GetBoolean`: the FMU has no Boolean variables, so any value reference is an error.
+    ///
+    /// # Safety
+    /// See [`fmi2GetReal`].
+    fn fmi2GetBoolean(vr: *const fmi2ValueReference, nvr: usize, value: *mut fmi2Boolean) |fmu| {
+        // SAFETY: null or valid for `nvr` elements per this function's contract.
+        let (Some(vr), Some(_)) = (unsafe { (slice(vr, nvr), slice_mut(value, nvr)) }) else {
+            return null_argument(fmu, "fmi2GetBoolean");
+        };
+        no_variable_of(fmu, "Boolean", vr)
+    }
+}
+
+entry! {
+    /// `fmi2GetString`: no String variables (any value reference is an error).
+    ///
+    /// # Safety
+    /// See [`fmi2GetReal`].
+    fn fmi2GetString(vr: *const fmi2ValueReference, nvr: usize, value: *mut fmi2String) |fmu| {
+        // SAFETY: null or valid for `nvr` elements per this function's contract.
+        let (Some(vr), Some(_)) = (unsafe { (slice(vr, nvr), slice_mut(value, nvr)) }) else {
+            return null_argument(fmu, "fmi2GetString");
+        };
+        no_variable_of(fmu, "String", vr)
+    }
+}
+
+entry! {
+    /// `fmi2SetReal`: inputs and parameters (see `Instance::set_real`).
+    ///
+    /// # Safety
+    /// See [`guard`]; `vr` and `value` are null or valid for `nvr` elements.
+    fn fmi2SetReal(vr: *const fmi2ValueReference, nvr: usize, value: *const fmi2Real) |fmu| {
+        // SAFETY: null or valid for `nvr` elements per this function's contract.
+        let (Some(vr), Some(v)) = (unsafe { (slice(vr, nvr), slice(value, nvr)) }) else {
+            return null_argument(fmu, "fmi2SetReal");
+        };
+        let r = fmu.instance.set_real(vr, v);
+        fmu.report(r)
+    }
+}
+
+entry! {
+    /// `fmi2SetInteger`: the segment budget and the friction law.
+    ///
+    /// # Safety
+    /// See [`fmi2SetReal`].
+    fn fmi2SetInteger(vr: *const fmi2ValueReference, nvr: usize, value: *const fmi2Integer) |fmu| {
+        // SAFETY: null or valid for `nvr` elements per this function's contract.
+        let (Some(vr), Some(v)) = (unsafe { (slice(vr, nvr), slice(value, nvr)) }) else {
+            return null_argument(fmu, "fmi2SetInteger");
+        };
+        let r = fmu.instance.set_integer(vr, v);
+        fmu.report(r)
+    }
+}
+
+entry! {
+    /// `fmi2SetBoolean`: no Boolean variables (any value reference is an error).
+    ///
+    /// # Safety
+    /// See [`fmi2SetReal`].
+    fn fmi2SetBoolean(vr: *const fmi2ValueReference, nvr: usize, value: *const fmi2Boolean) |fmu| {
+        // SAFETY: null or valid for `nvr` elements per this function's contract.
+        let (Some(vr), Some(_)) = (unsafe { (slice(vr, nvr), slice(value, nvr)) }) else {
+            return null_argument(fmu, "fmi2SetBoolean");
+        };
+        no_variable_of(fmu, "Boolean", vr)
+    }
+}
+
+entry! {
+    /// `fmi2SetString`: no String variables (any value reference is an error).
+    ///
+    /// # Safety
+    /// See [`fmi2SetReal`].
+    fn fmi2SetString(vr: *const fmi2ValueReference, nvr: usize, value: *const fmi2String) |fmu| {
+        // SAFETY: null or valid for `nvr` elements per this function's contract.
+        let (Some(vr), Some(_)) = (unsafe { (slice(vr, nvr), slice(value, nvr)) }) else {
+            return null_argument(fmu, "fmi2SetString");
+        };
+        no_variable_of(fmu, "String", vr)
+    }
+}
+
+entry! {
+    /// `fmi2DoStep`: `communicationStepSize` must be a whole multiple of `config.h`.
+    ///
+    /// # Safety
+    /// See [`guard`].
+    fn fmi2DoStep(
+        current_communication_point: fmi2Real,
+        communication_step_size: fmi2Real,
+        _no_set_fmu_state_prior: fmi2Boolean,
+    ) |fmu| {
+        let r = fmu
+            .instance
+            .do_step(current_communication_point, communication_step_size);
+        fmu.report(r)
+    }
+}
+
+entry! {
+    /// `fmi2CancelStep`: steps are synchronous, there is nothing to cancel.
+    ///
+    /// # Safety
+    /// See [`guard`].
+    fn fmi2CancelStep() |fmu| unsupported(fmu, "fmi2CancelStep (steps are synchronous)")
+}
+
+entry! {
+    /// `fmi2GetStatus` and friends: only meaningful after `fmi2Pending`, which this FMU never
+    /// returns; `fmi2Terminated` is answered (true after a failed step).
+    ///
+    /// # Safety
+    /// See [`guard`]; `value` null or writable.
+    fn fmi2GetStatus(_kind: fmi2StatusKind, _value: *mut fmi2Status) |_| FMI2_DISCARD
+}
+
+entry! {
+    /// `fmi2GetRealStatus`: `fmi2LastSuccessfulTime` (2) gives the FMU's time.
+    ///
+    /// # Safety
+    /// See [`guard`]; `value` null or writable.
+    fn fmi2GetRealStatus(kind: fmi2StatusKind, value: *mut fmi2Real) |fmu| {
+        // SAFETY: null or writable for one element per this function's contract.
+        let Some(out) = (unsafe { slice_mut(value, 1) }) else {
+            return null_argument(fmu, "fmi2GetRealStatus");
+        };
+        if kind == 2 {
+            out[0] = fmu.instance.time();
+            FMI2_OK
+        } else {
+            FMI2_DISCARD
+        }
+    }
+}
+
+entry! {
+    /// `fmi2GetIntegerStatus`: nothing to report.
+    ///
+    /// # Safety
+    /// See [`guard`].
+    fn fmi2GetIntegerStatus(_kind: fmi2StatusKind, _value: *mut fmi2Integer) |_| FMI2_DISCARD
+}
+
+entry! {
+    /// `fmi2GetBooleanStatus`: `fmi2Terminated` (3) is true after a failed step.
+    ///
+    /// # Safety
+    /// See [`guard`]; `value` null or writable.
+    fn fmi2GetBooleanStatus(kind: fmi2StatusKind, value: *mut fmi2Boolean) |fmu| {
+        // SAFETY: null or writable for one element per this function's contract.
+        let Some(out) = (unsafe { slice_mut(value, 1) }) else {
+            return null_argument(fmu, "fmi2GetBooleanStatus");
+        };
+        if kind == 3 {
+            out[0] = c_int::from(fmu.instance.phase() == Phase::Failed);
+            FMI2_OK
+        } else {
+            FMI2_DISCARD
+        }
+    }
+}
+
+entry! {
+    /// `fmi2GetStringStatus`: nothing to report.
+    ///
+    /// # Safety
+    /// See [`guard`].
+    fn fmi2GetStringStatus(_kind: fmi2StatusKind, _value: *mut fmi2String) |_| FMI2_DISCARD
+}
+
+// ---- FMU state -------------------------------------------------------------------------
+// An `fmi2FMUstate` is a `Box<Snapshot>` from Rust's allocator (`Box::into_raw`), owned by
+// the importer until `fmi2FreeFMUstate`. A snapshot holds no pointer to its instance, so it
+// may be set into any instance of this FMU.
+
+/// Stores `snap` in `*slot`: in the state already there (FMI: "`*FMUstate` is overwritten"),
+/// else in a new one.
+///
+/// # Safety
+/// `slot` is non-null and valid for reads and writes of one `fmi2FMUstate`, which is null or
+/// a state of this FMU not yet freed and not used elsewhere during the call.
+unsafe fn store(slot: *mut fmi2FMUstate, snap: Snapshot) {
+    // SAFETY: `slot` is valid for reads by the contract above.
+    let old = unsafe { *slot };
+    if old.is_null() {
+        // SAFETY: `slot` is valid for writes by the contract above.
+        unsafe { *slot = Box::into_raw(Box::new(snap)) as fmi2FMUstate };
+    } else {
+        // SAFETY: a non-null `*slot` came from `Box::into_raw` of a `Snapshot` here and is
+        // live and unaliased, by the contract above.
+        unsafe { *(old as *mut Snapshot) = snap };
+    }
+}
+
+/// The snapshot behind an `fmi2FMUstate`, `None` if null.
+///
+/// # Safety
+/// `state` is null or a state of this FMU not yet freed, not written during the call.
+unsafe fn snapshot_at<'a>(state: fmi2FMUstate) -> Option<&'a Snapshot> {
+    // SAFETY: null or from `Box::into_raw` of a live `Snapshot`, by the contract above.
+    unsafe { (state as *const Snapshot).as_ref() }
+}
+
+entry! {
+    /// `fmi2GetFMUstate`: a copy of everything that determines the instance's future
+    /// ([`Snapshot`]) in `*state` (a new state if `*state` is null, else the state there is
+    /// overwritten). Allowed in every phase.
+    ///
+    /// # Safety
+    /// See [`guard`]; `state` is null or points to a readable and writable `fmi2FMUstate`
+    /// that is null or a state of this FMU not yet freed.
+    fn fmi2GetFMUstate(state: *mut fmi2FMUstate) |fmu| {
+        if state.is_null() {
+            return null_argument(fmu, "fmi2GetFMUstate");
+        }
+        // SAFETY: non-null, and per this function's contract valid and holding null or a
+        // live state of this FMU.
+        unsafe { store(state, fmu.instance.snapshot()) };
+        FMI2_OK
+    }
+}
+
+entry! {
+    /// `fmi2SetFMUstate`: back to `state` (parameters, inputs, time, simulator). The values
+    /// are checked as at initialisation; on error the instance is unchanged.
+    ///
+    /// # Safety
+    /// See [`guard`]; `state` is null or a state of this FMU not yet freed.
+    fn fmi2SetFMUstate(state: fmi2FMUstate) |fmu| {
+        // SAFETY: null or a live state of this FMU, per this function's contract.
+        let Some(snap) = (unsafe { snapshot_at(state) }) else {
+            return null_argument(fmu, "fmi2SetFMUstate");
+        };
+        let r = fmu.instance.restore(snap);
+        fmu.report(r)
+    }
+}
+
+entry! {
+    /// `fmi2FreeFMUstate`: frees `*state` and sets it to null (a null `*state` is ignored).
+    ///
+    /// # Safety
+    /// See [`guard`]; `state` is null or points to a readable and writable `fmi2FMUstate`
+    /// that is null or a state of this FMU not yet freed, not used afterwards.
+    fn fmi2FreeFMUstate(state: *mut fmi2FMUstate) |fmu| {
+        if state.is_null() {
+            return null_argument(fmu, "fmi2FreeFMUstate");
+        }
+        // SAFETY: non-null and valid for reads and writes per this function's contract.
+        let old = unsafe { std::mem::replace(&mut *state, std::ptr::null_mut()) };
+        if !old.is_null() {
+            // SAFETY: from `Box::into_raw` of a `Snapshot` in `store`, freed once here (the
+            // importer's pointer is now null).
+            drop(unsafe { Box::from_raw(old as *mut Snapshot) });
+        }
+        FMI2_OK
+    }
+}
+
+entry! {
+    /// `fmi2SerializedFMUstateSize`: the byte count of `state` serialized (the same for every
+    /// state of this FMU).
+    ///
+    /// # Safety
+    /// See [`guard`]; `state` is null or a state of this FMU not yet freed; `size` is null or
+    /// writable.
+    fn fmi2SerializedFMUstateSize(state: fmi2FMUstate, size: *mut usize) |fmu| {
+        // SAFETY: per this function's contract: `state` null or live, `size` null or writable.
+        let (Some(snap), Some(out)) = (unsafe { (snapshot_at(state), slice_mut(size, 1)) })
+        else {
+            return null_argument(fmu, "fmi2SerializedFMUstateSize");
+        };
+        out[0] = snap.to_bytes().len();
+        FMI2_OK
+    }
+}
+
+entry! {
+    /// `fmi2SerializeFMUstate`: writes `state` to `bytes`, whose `size` must be
+    /// [`fmi2SerializedFMUstateSize`]'s.
+    ///
+    /// # Safety
+    /// See [`guard`]; `state` is null or a state of this FMU not yet freed; `bytes` is null or
+    /// writable for `size` bytes.
+    fn fmi2SerializeFMUstate(state: fmi2FMUstate, bytes: *mut fmi2Byte, size: usize) |fmu| {
+        // SAFETY: per this function's contract: `state` null or live, `bytes` null or
+        // writable for `size` bytes (`c_char` and `u8` have the same layout).
+        let (Some(snap), Some(out)) =
+            (unsafe { (snapshot_at(state), slice_mut(bytes as *mut u8, size)) })
+        else {
+            return null_argument(fmu, "fmi2SerializeFMUstate");
+        };
+        let data = snap.to_bytes();
+        if data.len() != size {
+            return fmu.report(Err(Failure {
+                status: Status::Error,
+                message: format!(
+                    "fmi2SerializeFMUstate: size {size} given, the state needs {} bytes \
+                     (fmi2SerializedFMUstateSize)",
+                    data.len()
+                ),
+            }));
+        }
+        out.copy_from_slice(&data);
+        FMI2_OK
+    }
+}
+
+entry! {
+    /// `fmi2DeSerializeFMUstate`: reads a state written by [`fmi2SerializeFMUstate`] (of an
+    /// FMU with the same GUID) into `*state` (a new state if `*state` is null, else the state
+    /// there is overwritten). A wrong size, header or checksum is `fmi2Error` with a logged
+    /// message, `*state` unchanged.
+    ///
+    /// # Safety
+    /// See [`guard`]; `bytes` is null or readable for `size` bytes; `state` is null or points
+    /// to a readable and writable `fmi2FMUstate` that is null or a state of this FMU not yet
+    /// freed.
+    fn fmi2DeSerializeFMUstate(
+        bytes: *const fmi2Byte,
+        size: usize,
+        state: *mut fmi2FMUstate,
+    ) |fmu| {
+        // SAFETY: null or readable for `size` bytes per this function's contract (`c_char`
+        // and `u8` have the same layout).
+        let Some(data) = (unsafe { slice(bytes as *const u8, size) }) else {
+            return null_argument(fmu, "fmi2DeSerializeFMUstate");
+        };
+        if state.is_null() {
+            return null_argument(fmu, "fmi2DeSerializeFMUstate");
+        }
+        match Snapshot::from_bytes(data) {
+            Ok(snap) => {
+                // SAFETY: non-null, and per this function's contract valid and holding null
+                // or a live state of this FMU.
+                unsafe { store(state, snap) };
+                FMI2_OK
+            }
+            Err(f) => fmu.report(Err(f)),
+        }
+    }
+}
+
+macro_rules! not_supported {
+    ($name:ident ( $($arg:ident : $ty:ty),* )) => {
+        entry! {
+            #[doc = concat!("`", stringify!($name), "`: not supported (capability flag false); `fmi2Error`.")]
+            ///
+            /// # Safety
+            /// See [`guard`].
+            fn $name($(_: $ty),*) |fmu| unsupported(fmu, stringify!($name))
+        }
+    };
+}
+
 not_supported!(fmi2GetDirectionalDerivative(
     unknown: *const fmi2ValueReference,
     n_unknown: usize,

@@ -8,6 +8,7 @@
 //!   table both the binary and `modelDescription.xml` are made from.
 //! - [`instance`]: the co-simulation state machine around the model, safe Rust.
 //! - [`description`]: `modelDescription.xml`, `documentation/index.html`, the GUID.
+//! - [`snapshot`]: the FMU state (`fmi2GetFMUstate`) as plain data and its serialized form.
 //! - [`ffi`]: the `fmi2*` C entry points; the only unsafe code of the workspace outside the
 //!   firmware's HAL, each block with a `// SAFETY:` comment, every body behind
 //!   `catch_unwind`.
@@ -22,4 +23,5 @@
 pub mod description;
 pub mod ffi;
 pub mod instance;
+pub mod snapshot;
 pub mod variables;

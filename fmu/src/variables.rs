@@ -56,6 +56,14 @@ pub enum Slot {
     InitQd(usize),
     /// Segment budget of a step (integer, `1..=8`).
     SegmentBudget,
+    /// Friction law (integer: 0 hybrid, 1 `tanh`).
+    Law,
+    /// Slope factor `gamma` [s/m] of the `tanh` law.
+    Gamma,
+    /// Stiction ratio (breakaway over sliding friction, >= 1) of drive axis `i`.
+    StictionRatio(usize),
+    /// Stribeck velocity [m/s] of drive axis `i`.
+    StribeckVelocity(usize),
     /// Position `q[i]`.
     Q(usize),
     /// Velocity `qd[i]`.
@@ -89,6 +97,102 @@ pub struct Variable {
     pub description: &'static str,
     /// What it stands for.
     pub slot: Slot,
+    /// The range the FMU checks a set value against (`min`/`max` of `modelDescription.xml`).
+    pub range: Range,
+}
+
+/// The smallest positive f64 (`5e-324`): the `min` of a parameter that must be `> 0`, since
+/// FMI's `min` is inclusive and every f64 `>= 5e-324` is `> 0`.
+pub const SMALLEST_POSITIVE: f64 = 5e-324;
+
+/// The closed range `[min, max]` a variable's value must lie in, as `modelDescription.xml`
+/// declares it (`None`: unbounded on that side). The same range the model (or the FMU)
+/// checks when the value is used; every value must also be finite.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Range {
+    /// Smallest accepted value, in the variable's unit.
+    pub min: Option<f64>,
+    /// Largest accepted value, in the variable's unit.
+    pub max: Option<f64>,
+}
+
+impl Range {
+    /// Any finite value.
+    pub const ANY: Range = Range {
+        min: None,
+        max: None,
+    };
+    /// `>= 0`.
+    pub const NON_NEGATIVE: Range = Range {
+        min: Some(0.0),
+        max: None,
+    };
+    /// `> 0` (declared as `min = 5e-324`, see [`SMALLEST_POSITIVE`]).
+    pub const POSITIVE: Range = Range {
+        min: Some(SMALLEST_POSITIVE),
+        max: None,
+    };
+
+    /// `>= min`.
+    pub const fn at_least(min: f64) -> Range {
+        Range {
+            min: Some(min),
+            max: None,
+        }
+    }
+
+    /// `min <= value <= max`.
+    pub const fn between(min: f64, max: f64) -> Range {
+        Range {
+            min: Some(min),
+            max: Some(max),
+        }
+    }
+}
+
+/// Which end of a drive axis' travel a parameter is (`x.min`, `rope.max`...).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LimitEnd {
+    /// The lower position limit `min` [m].
+    Min,
+    /// The upper position limit `max` [m].
+    Max,
+}
+
+/// Names of the drive axes as the parameter names spell them (X, Y, rope).
+pub const AXES: [&str; 3] = ["x", "y", "rope"];
+
+/// For model parameter `i` ([`PARAMS`] order) that is a position limit: its axis (0 X, 1 Y,
+/// 2 rope) and end.
+pub fn limit_of(i: usize) -> Option<(usize, LimitEnd)> {
+    let axis = i.checked_sub(6)? / 16;
+    if axis >= 3 {
+        return None;
+    }
+    match (i - 6) % 16 {
+        14 => Some((axis, LimitEnd::Min)),
+        15 => Some((axis, LimitEnd::Max)),
+        _ => None,
+    }
+}
+
+/// The range `crane_model::Params::validate` checks model parameter `i` ([`PARAMS`] order)
+/// against, taken alone: masses `payload_mass`, `trolley_mass` and the gains `> 0`; the other
+/// masses, gravity, inertias, viscous and swing damping coefficients `>= 0`; `rope.min > 0`;
+/// polynomial coefficients and the other limits any finite value (`min < max` of one axis
+/// is a condition on the pair, checked at `fmi2ExitInitializationMode`).
+pub fn param_range(i: usize) -> Range {
+    match i {
+        0 | 1 => Range::POSITIVE,
+        2..=5 => Range::NON_NEGATIVE,
+        6..=53 => match (i - 6) % 16 {
+            0 | 2 | 3 => Range::NON_NEGATIVE,
+            1 => Range::POSITIVE,
+            14 if i == 38 + 14 => Range::POSITIVE,
+            _ => Range::ANY,
+        },
+        _ => Range::ANY,
+    }
 }
 
 /// Units used by the variables, with their SI base-unit exponents
@@ -110,6 +214,8 @@ pub const UNITS: &[(&str, [i8; 5])] = &[
     ("N/m2", [1, -1, -2, 0, 0]),
     ("N/m3", [1, -2, -2, 0, 0]),
     ("N/m4", [1, -3, -2, 0, 0]),
+    ("s/m", [0, -1, 1, 0, 0]),
+    ("1", [0, 0, 0, 0, 0]),
 ];
 
 /// Number of model parameters (fields of [`Params`]).
@@ -309,7 +415,8 @@ pub fn param(p: &Params, i: usize) -> Option<f64> {
 }
 
 /// Everything the importer can set before initialisation: model parameters, step, initial
-/// state and segment budget. `Default` gives the start values of `modelDescription.xml`.
+/// state, segment budget and friction options. `Default` gives the start values of
+/// `modelDescription.xml`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Settings {
     /// Model parameters (start values: `Params::default()`).
@@ -321,6 +428,18 @@ pub struct Settings {
     pub init: State<f64>,
     /// Segment budget of a step (start 8 = `crane_model::MAX_SEGMENTS`).
     pub segment_budget: i32,
+    /// Friction law: 0 the hybrid automaton (exact sticking, start), 1 the smooth
+    /// `Dbar qd + Cbar(q) tanh(gamma qd)` law (`crane_model::FrictionLaw`).
+    pub law: i32,
+    /// Slope factor `gamma` [s/m] of the `tanh` law (start 1000, the Python package's
+    /// default; checked `> 0` whatever the law).
+    pub gamma: f64,
+    /// Stiction ratio per drive axis (X, Y, rope): breakaway over sliding dry friction
+    /// (`crane_model::Stiction::ratio`, >= 1; start 1, no stiction).
+    pub stiction_ratio: [f64; 3],
+    /// Stribeck velocity [m/s] per drive axis (`crane_model::Stiction::velocity`, > 0;
+    /// start 0.005, the Python environment's).
+    pub stribeck_velocity: [f64; 3],
 }
 
 impl Default for Settings {
@@ -333,13 +452,39 @@ impl Default for Settings {
                 qd: [0.0; 5],
             },
             segment_budget: crane_model::MAX_SEGMENTS as i32,
+            law: 0,
+            gamma: 1000.0,
+            stiction_ratio: [1.0; 3],
+            stribeck_velocity: [0.005; 3],
         }
     }
 }
 
 /// Value references: inputs 0..3, outputs from 100, integer outputs from 200, model
-/// parameters from 1000, step 1100, initial state 1101..1110, segment budget 1200.
+/// parameters from 1000, step 1100, initial state 1101..1110, `tanh` slope 1111, segment
+/// budget 1200, friction law 1201, stiction 1300..1305 (ratio, Stribeck velocity per axis).
 const VR_PARAM: u32 = 1000;
+
+const STICTION_RATIO: [&str; 3] = [
+    "stiction[0].ratio",
+    "stiction[1].ratio",
+    "stiction[2].ratio",
+];
+const STRIBECK_VELOCITY: [&str; 3] = [
+    "stiction[0].velocity",
+    "stiction[1].velocity",
+    "stiction[2].velocity",
+];
+const STICTION_DESC: [&str; 3] = [
+    "stiction ratio of X: breakaway over sliding dry friction (>= 1; 1 is no stiction)",
+    "stiction ratio of Y: breakaway over sliding dry friction (>= 1; 1 is no stiction)",
+    "stiction ratio of the rope: breakaway over sliding dry friction (>= 1; 1 is no stiction)",
+];
+const STRIBECK_DESC: [&str; 3] = [
+    "Stribeck velocity of X: sliding dry friction Cbar (1 + (ratio - 1) exp(-(v / velocity)^2)) (> 0)",
+    "Stribeck velocity of Y: sliding dry friction Cbar (1 + (ratio - 1) exp(-(v / velocity)^2)) (> 0)",
+    "Stribeck velocity of the rope: sliding dry friction Cbar (1 + (ratio - 1) exp(-(v / velocity)^2)) (> 0)",
+];
 
 const Q_NAMES: [&str; 5] = ["q.x", "q.y", "q.l", "q.alpha", "q.beta"];
 const QD_NAMES: [&str; 5] = ["qd.x", "qd.y", "qd.l", "qd.alpha", "qd.beta"];
@@ -401,6 +546,7 @@ pub fn all() -> Vec<Variable> {
         unit: Some(unit),
         description,
         slot,
+        range: Range::ANY,
     };
     let mut v = Vec::with_capacity(100);
     for (i, (name, desc)) in [
@@ -496,38 +642,60 @@ pub fn all() -> Vec<Variable> {
             unit: None,
             description: "mode of the drive axis: -1 moving negative, 0 stopped (exact sticking), 1 moving positive",
             slot: Slot::Mode(i),
+            range: Range::ANY,
         });
     }
     for (i, (name, unit, desc)) in PARAMS.iter().enumerate() {
-        v.push(real(
-            name,
-            VR_PARAM + i as u32,
-            C::Parameter,
-            V::Tunable,
-            unit,
-            desc,
-            Slot::Param(i),
-        ));
+        v.push(Variable {
+            range: param_range(i),
+            ..real(
+                name,
+                VR_PARAM + i as u32,
+                C::Parameter,
+                V::Tunable,
+                unit,
+                desc,
+                Slot::Param(i),
+            )
+        });
     }
-    v.push(real(
-        "config.h",
-        1100,
-        C::Parameter,
-        V::Fixed,
-        "s",
-        "fixed model step h (> 0); every communication step must be a whole multiple of it",
-        Slot::Step,
-    ));
-    for i in 0..5 {
-        v.push(real(
-            INIT_Q[i],
-            1101 + i as u32,
+    v.push(Variable {
+        range: Range::POSITIVE,
+        ..real(
+            "config.h",
+            1100,
             C::Parameter,
             V::Fixed,
-            Q_UNITS[i],
-            INIT_Q_DESC[i],
-            Slot::InitQ(i),
-        ));
+            "s",
+            "fixed model step h (> 0); every communication step must be a whole multiple of it",
+            Slot::Step,
+        )
+    });
+    // The swing angles' own domain (the swing stops, `crane_model::SWING_STOP`); the
+    // drive positions must lie within their axis limits, which are parameters themselves.
+    let (half_pi, stop) = (core::f64::consts::FRAC_PI_2, crane_model::SWING_STOP);
+    let angle_range = [
+        Range::between(half_pi - stop, half_pi + stop),
+        Range::between(-stop, stop),
+    ];
+    for i in 0..5 {
+        let range = if i >= 3 {
+            angle_range[i - 3]
+        } else {
+            Range::ANY
+        };
+        v.push(Variable {
+            range,
+            ..real(
+                INIT_Q[i],
+                1101 + i as u32,
+                C::Parameter,
+                V::Fixed,
+                Q_UNITS[i],
+                INIT_Q_DESC[i],
+                Slot::InitQ(i),
+            )
+        });
     }
     for i in 0..5 {
         v.push(real(
@@ -549,8 +717,69 @@ pub fn all() -> Vec<Variable> {
         unit: None,
         description: "integration segments one step may use (1..=8): a real-time bound on the work of a step",
         slot: Slot::SegmentBudget,
+        range: Range::between(1.0, crane_model::MAX_SEGMENTS as f64),
     });
+    friction_options(&mut v);
     v
+}
+
+/// The friction options of the Python package (`crane_twin.Crane(law=..., gamma=...,
+/// stiction=...)`): the law, the `tanh` slope and stiction per drive axis.
+fn friction_options(v: &mut Vec<Variable>) {
+    v.push(Variable {
+        name: "config.law.kind",
+        vr: 1201,
+        kind: Kind::Integer,
+        causality: Causality::Parameter,
+        variability: Variability::Fixed,
+        unit: None,
+        description: "friction law of the drive axes: 0 hybrid automaton (exact sticking), 1 smooth Dbar qd + Cbar(q) tanh(gamma qd) (no modes: mode outputs follow the sign of the velocity)",
+        slot: Slot::Law,
+        range: Range::between(0.0, 1.0),
+    });
+    v.push(Variable {
+        name: "config.law.gamma",
+        vr: 1111,
+        kind: Kind::Real,
+        causality: Causality::Parameter,
+        variability: Variability::Fixed,
+        unit: Some("s/m"),
+        description: "slope factor gamma of the tanh law (> 0; used when config.law.kind = 1)",
+        slot: Slot::Gamma,
+        range: Range::POSITIVE,
+    });
+    for i in 0..3 {
+        for (name, vr, unit, description, slot, range) in [
+            (
+                STICTION_RATIO[i],
+                1300 + 2 * i as u32,
+                "1",
+                STICTION_DESC[i],
+                Slot::StictionRatio(i),
+                Range::at_least(1.0),
+            ),
+            (
+                STRIBECK_VELOCITY[i],
+                1301 + 2 * i as u32,
+                "m/s",
+                STRIBECK_DESC[i],
+                Slot::StribeckVelocity(i),
+                Range::POSITIVE,
+            ),
+        ] {
+            v.push(Variable {
+                name,
+                vr,
+                kind: Kind::Real,
+                causality: Causality::Parameter,
+                variability: Variability::Tunable,
+                unit: Some(unit),
+                description,
+                slot,
+                range,
+            });
+        }
+    }
 }
 
 /// The variable table, built once per process and shared by every instance.
@@ -569,12 +798,57 @@ pub fn lookup(vars: &[Variable], kind: Kind, vr: u32) -> Option<&Variable> {
 pub fn start(s: &Settings, slot: Slot) -> Option<f64> {
     match slot {
         Slot::Input(_) => Some(0.0),
+        _ => setting(s, slot),
+    }
+}
+
+/// The value of a parameter slot in `s` (integers as f64, exactly); `None` for inputs and
+/// outputs.
+pub fn setting(s: &Settings, slot: Slot) -> Option<f64> {
+    match slot {
         Slot::Param(i) => param(&s.params, i),
         Slot::Step => Some(s.h),
         Slot::InitQ(i) => s.init.q.get(i).copied(),
         Slot::InitQd(i) => s.init.qd.get(i).copied(),
         Slot::SegmentBudget => Some(f64::from(s.segment_budget)),
+        Slot::Law => Some(f64::from(s.law)),
+        Slot::Gamma => Some(s.gamma),
+        Slot::StictionRatio(i) => s.stiction_ratio.get(i).copied(),
+        Slot::StribeckVelocity(i) => s.stribeck_velocity.get(i).copied(),
         _ => None,
+    }
+}
+
+/// Sets a parameter slot of `s` to `value` (integer slots take a whole f64 in `i32` range);
+/// `false`, and nothing changed, for inputs, outputs and integers that are not whole.
+pub fn set_setting(s: &mut Settings, slot: Slot, value: f64) -> bool {
+    let whole =
+        value.fract() == 0.0 && value >= f64::from(i32::MIN) && value <= f64::from(i32::MAX);
+    let dst = match slot {
+        Slot::SegmentBudget | Slot::Law if !whole => return false,
+        Slot::SegmentBudget => {
+            s.segment_budget = value as i32;
+            return true;
+        }
+        Slot::Law => {
+            s.law = value as i32;
+            return true;
+        }
+        Slot::Param(i) => param_mut(&mut s.params, i),
+        Slot::Step => Some(&mut s.h),
+        Slot::InitQ(i) => s.init.q.get_mut(i),
+        Slot::InitQd(i) => s.init.qd.get_mut(i),
+        Slot::Gamma => Some(&mut s.gamma),
+        Slot::StictionRatio(i) => s.stiction_ratio.get_mut(i),
+        Slot::StribeckVelocity(i) => s.stribeck_velocity.get_mut(i),
+        _ => None,
+    };
+    match dst {
+        Some(d) => {
+            *d = value;
+            true
+        }
+        None => false,
     }
 }
 

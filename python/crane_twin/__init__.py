@@ -6,6 +6,12 @@ native speed.
   released), results as numpy arrays.
 - :class:`Params`: parameters, to and from the ``crane`` CLI's TOML files.
 - :class:`CraneBatch`: simulators stepped together (the vector environment's engine).
+- :func:`linearize`: the Jacobians ``A``, ``B`` of the continuous-time model at a sliding
+  operating point (for python-control).
+- Full snapshots (what issue 23 calls ``get_state`` / ``set_state``): ``snapshot()`` /
+  ``restore(snapshot)`` / ``from_snapshot(snapshot)`` on :class:`Crane` and
+  :class:`CraneBatch`, and on the Gymnasium environments; ``pickle`` round trips of all of
+  them are exact.
 - Gymnasium: ``CraneAntiSway-v0`` is registered on import when gymnasium is installed
   (:mod:`crane_twin.envs`).
 
@@ -15,7 +21,7 @@ the voltages ``[u_x, u_y, u_l]``, saturated to +-12 V.
 
 from __future__ import annotations
 
-from ._native import U_MAX, Crane, CraneBatch, Params, rollout, rollouts
+from ._native import U_MAX, Crane, CraneBatch, Params, linearize, rollout, rollouts
 from .errors import CraneError, InputError, ParameterError, ParamsFileError, StepError
 
 __all__ = [
@@ -24,6 +30,7 @@ __all__ = [
     "Params",
     "rollout",
     "rollouts",
+    "linearize",
     "U_MAX",
     "CraneError",
     "InputError",

@@ -39,10 +39,26 @@ class Params:
     def __eq__(self, other: object) -> bool: ...
 
 class Crane:
-    """One simulator (hybrid or tanh friction, fixed step ``h`` [s])."""
+    """One simulator (hybrid or tanh friction, fixed step ``h`` [s]).
+
+    Copies (``copy``, ``deepcopy``) and ``pickle`` round trips continue bit for bit.
+    ``snapshot()`` / ``restore()`` are what issue 23 calls ``get_state`` / ``set_state`` (the
+    ``state`` property is only the physical state vector)."""
 
     def __copy__(self) -> "Crane": ...
     def __deepcopy__(self, memo: object) -> "Crane": ...
+    def snapshot(self) -> Dict[str, Any]:
+        """The full state as a dict of plain values: ``format`` ("crane_twin.Crane"),
+        ``version`` (1), ``params`` (``Params.to_dict()``), ``h`` [s], ``law``, ``gamma`` [s/m]
+        or None, ``stiction`` (3 entries, None or ``[ratio, velocity m/s]``), ``init`` (the 10
+        values ``reset()`` returns to), ``state`` (10 values [m, rad, m/s, rad/s]), ``modes``
+        (3 of -1, 0, 1), ``steps``, ``u_last`` (the last saturated input [V])."""
+    def restore(self, snapshot: Dict[str, Any]) -> None:
+        """Continues from ``snapshot`` bit for bit; a bad key raises ``InputError`` naming it
+        (``snapshot["modes"]``), a refused value ``ParameterError``; nothing changes then."""
+    @staticmethod
+    def from_snapshot(snapshot: Dict[str, Any]) -> "Crane":
+        """A new simulator from ``snapshot()`` (``pickle`` uses it)."""
 
     def __init__(
         self,
@@ -76,10 +92,22 @@ class Crane:
     def params(self) -> Params: ...
 
 class CraneBatch:
-    """Simulators stepped together in Rust (the vector environment's engine)."""
+    """Simulators stepped together in Rust (the vector environment's engine).
+
+    Copies and ``pickle`` round trips continue bit for bit; ``snapshot()`` / ``restore()``
+    are issue 23's ``get_state`` / ``set_state``."""
 
     def __copy__(self) -> "CraneBatch": ...
     def __deepcopy__(self, memo: object) -> "CraneBatch": ...
+    def snapshot(self) -> Dict[str, Any]:
+        """``{"format": "crane_twin.CraneBatch", "version": 1, "sims": [Crane.snapshot() dict
+        per simulator]}``."""
+    def restore(self, snapshot: Dict[str, Any]) -> None:
+        """Replaces every simulator (the batch takes the snapshot's length); errors name the
+        key (``snapshot["sims"][2]["state"]``); nothing changes on error."""
+    @staticmethod
+    def from_snapshot(snapshot: Dict[str, Any]) -> "CraneBatch":
+        """A new batch from ``snapshot()`` (``pickle`` uses it)."""
 
     def __init__(
         self,
@@ -128,3 +156,24 @@ def rollouts(
     stiction: StictionLike = None,
 ) -> Dict[str, np.ndarray]:
     """As ``rollout`` with a leading simulation axis (``t`` stays (n+1,))."""
+
+def linearize(
+    params: ParamsLike,
+    state: StateLike,
+    u: Sequence[float],
+    *,
+    stiction: StictionLike = None,
+    eps: float = 1e-6,
+) -> Tuple[FloatArray, FloatArray]:
+    """``(A, B)``, ``(10, 10)`` and ``(10, 3)``: the Jacobians of the hybrid model's
+    continuous-time right-hand side ``dx/dt = f(x, u)`` at ``(state, u)`` by central finite
+    differences (steps ``eps * max(1, |v|)``), for python-control (``control.ss(A, B, C, D)``).
+
+    ``x = [x, y, L, alpha, beta, xd, yd, Ld, alphad, betad]`` [m, m, m, rad, rad, m/s, m/s,
+    m/s, rad/s, rad/s] (hanging: ``alpha = pi/2``, ``beta = 0``; ``Ld > 0`` lowers), ``u =
+    [u_x, u_y, u_l]`` [V] strictly inside +-12 V. X and Y must slide (``xd``, ``yd``
+    nonzero): a stopped axis raises ``InputError`` naming ``state.qd[i]`` (dry friction is
+    not differentiable at zero velocity). The rope slides or is held by friction strictly
+    inside its breakaway band (held: rows ``L``, ``Ld`` and column ``Ld`` are zero). A
+    sliding point is no equilibrium: ``d(dx)/dt = A dx + B du`` models deviations from the
+    nonlinear trajectory through it, over short horizons while no axis stops."""

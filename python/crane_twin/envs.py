@@ -29,6 +29,13 @@ model's domain: ``crane_twin.StepError``) raises instead of returning a made-up 
 ``CraneAntiSwayVectorEnv`` steps ``num_envs`` of these in one ``CraneBatch`` call (Rust, GIL
 released); its env ``i`` reset with seed ``s`` runs exactly as ``CraneAntiSwayEnv`` reset with
 seed ``s + i`` (the same bits).
+
+Snapshots (what issue 23 calls ``get_state`` / ``set_state``): ``env.snapshot()`` returns a
+versioned dict of plain values (simulators, episode draws, targets, encoder memory, period
+counts, random generators; layout in :mod:`crane_twin._env_snapshot`), and
+``env.restore(snapshot)`` continues from it bit for bit (on ``gym.make``'s wrappers call
+``env.unwrapped.snapshot()``). ``pickle`` and ``copy.deepcopy`` of both environments are
+exact too (pickling goes through ``snapshot``; a ``"human"`` window is not pickled).
 """
 
 from __future__ import annotations
@@ -44,7 +51,9 @@ from gymnasium.utils import seeding
 from gymnasium.vector.utils import batch_space
 
 from ._native import U_MAX, CraneBatch, Params
+from . import _env_snapshot as _snap
 from . import render as _render
+from .errors import InputError
 
 ENV_ID = "CraneAntiSway-v0"
 
@@ -189,6 +198,11 @@ class _Episodes:
         params, stiction, state, _ = self.episodes[i]
         self.episodes[i] = (params, stiction, state, np.array(target, dtype=np.float64))
 
+    def assign(self, values: dict) -> None:
+        """Sets the attributes checked by ``_env_snapshot.core_values``."""
+        for k, v in values.items():
+            setattr(self, k, v)
+
     def first_obs(self, i: int) -> np.ndarray:
         return np.concatenate([self.prev[i], np.zeros(5), self.targets[i]])
 
@@ -320,6 +334,45 @@ class CraneAntiSwayEnv(gym.Env):
     def _info(self, state: np.ndarray) -> dict:
         return {"state": state, "target": self._core.targets[0].copy()}
 
+    def snapshot(self) -> dict:
+        """A full snapshot (what issue 23 calls ``get_state``): a versioned dict of plain values
+        holding the simulator (``CraneBatch.snapshot()``), the episode's draw, target [m],
+        encoder memory, period count, ``np_random``'s state and whether ``step`` may be called
+        (layout: :mod:`crane_twin._env_snapshot`). Picklable and JSON-serialisable."""
+        snap = {"format": _snap.SINGLE_FORMAT, "version": _snap.VERSION}
+        snap.update(_snap.core_snapshot(self._core))
+        snap["rng"] = _snap.rng_state(self._np_random)
+        snap["np_random_seed"] = self._np_random_seed
+        snap["started"] = self._started
+        return snap
+
+    def restore(self, snapshot: dict) -> None:
+        """Continues from ``snapshot`` (from ``snapshot()`` of an env with the same task and
+        nominal parameters) bit for bit: the same observations, rewards and later seeded or
+        unseeded resets (what issue 23 calls ``set_state``). A bad snapshot raises
+        ``crane_twin.InputError`` naming the key (or ``ParameterError``); nothing changes then."""
+        snap = _snap.checked(snapshot, _snap.SINGLE_FORMAT, _snap.SINGLE_KEYS)
+        values = _snap.core_values(self._core, snap)
+        rng = _snap.rng_from(snap["rng"], 'snapshot["rng"]')
+        seed = snap["np_random_seed"]
+        if not (seed is None or (isinstance(seed, int) and not isinstance(seed, bool))):
+            raise InputError(f'`snapshot["np_random_seed"]` must be an int or None (got {seed!r})')
+        if not isinstance(snap["started"], bool):
+            raise InputError(f'`snapshot["started"]` must be a bool (got {snap["started"]!r})')
+        self._core.assign(values)
+        self._np_random, self._np_random_seed = rng, seed
+        self._started = snap["started"]
+
+    def __getstate__(self) -> dict:
+        """Pickled state: the attributes but the simulators, random generator and window,
+        plus ``{"version": 1, "snapshot": self.snapshot()}`` under ``"_pickled"``."""
+        return _pickled_state(self, ("_np_random",))
+
+    def __setstate__(self, state: dict) -> None:
+        """Unpickling: the attributes, then ``restore`` of the pickled snapshot (no window)."""
+        _unpickle(self, state, 1)
+        self._window = None
+
 
 class CraneAntiSwayVectorEnv(gym.vector.VectorEnv):
     """``num_envs`` cranes stepped together in Rust (one ``CraneBatch``), next-step autoreset.
@@ -381,6 +434,68 @@ class CraneAntiSwayVectorEnv(gym.vector.VectorEnv):
         self._needs_reset = truncated.copy()
         terminated = np.zeros(self.num_envs, dtype=bool)
         return obs, reward, terminated, truncated, {"target": self._core.targets.copy()}
+
+    def snapshot(self) -> dict:
+        """A full snapshot (what issue 23 calls ``get_state``): a versioned dict of plain values
+        holding the ``num_envs`` simulators, episode draws, targets [m], encoder memory, period
+        counts, the envs' random generators and autoreset flags (layout:
+        :mod:`crane_twin._env_snapshot`). Picklable and JSON-serialisable."""
+        snap = {"format": _snap.VECTOR_FORMAT, "version": _snap.VERSION}
+        snap.update(_snap.core_snapshot(self._core))
+        snap["rngs"] = [_snap.rng_state(r) for r in self._rngs]
+        snap["needs_reset"] = [bool(v) for v in self._needs_reset]
+        return snap
+
+    def restore(self, snapshot: dict) -> None:
+        """Continues from ``snapshot`` (from ``snapshot()`` of a vector env with the same
+        ``num_envs``, task and nominal parameters) bit for bit (what issue 23 calls
+        ``set_state``). A bad snapshot raises ``crane_twin.InputError`` naming the key (or
+        ``ParameterError``); nothing changes then."""
+        snap = _snap.checked(snapshot, _snap.VECTOR_FORMAT, _snap.VECTOR_KEYS)
+        values = _snap.core_values(self._core, snap)
+        m = self.num_envs
+        rngs = snap["rngs"]
+        if not isinstance(rngs, list) or len(rngs) != m:
+            raise InputError(f'`snapshot["rngs"]`: expected a list of {m} generator states')
+        rngs = [_snap.rng_from(r, f'snapshot["rngs"][{i}]') for i, r in enumerate(rngs)]
+        if any(r is None for r in rngs):
+            raise InputError('`snapshot["rngs"]`: every env needs its generator state')
+        needs = _snap.array(snap, "needs_reset", (m,), bool)
+        self._core.assign(values)
+        self._rngs, self._needs_reset = rngs, needs
+
+    def __getstate__(self) -> dict:
+        """Pickled state: the attributes but the simulators and random generators, plus
+        ``{"version": 1, "snapshot": self.snapshot()}`` under ``"_pickled"``."""
+        return _pickled_state(self, ("_rngs",))
+
+    def __setstate__(self, state: dict) -> None:
+        """Unpickling: the attributes, then ``restore`` of the pickled snapshot."""
+        _unpickle(self, state, state.get("num_envs", 0))
+
+
+def _pickled_state(env: Any, drop: tuple) -> dict:
+    """``env.__dict__`` without what its snapshot holds (and the render window), plus the
+    versioned snapshot."""
+    skip = ("_core", "_window") + drop
+    state = {k: v for k, v in env.__dict__.items() if k not in skip}
+    state["_pickled"] = {"version": _snap.VERSION, "snapshot": env.snapshot()}
+    return state
+
+
+def _unpickle(env: Any, state: dict, m: int) -> None:
+    """Rebuilds an env of ``m`` simulators from :func:`_pickled_state`'s dict."""
+    state = dict(state)
+    pickled = state.pop("_pickled", None)
+    if not isinstance(pickled, dict) or pickled.get("version") != _snap.VERSION:
+        raise InputError(
+            f"pickled CraneAntiSway env of an unknown version (this crane_twin reads "
+            f"version {_snap.VERSION})"
+        )
+    snap = pickled["snapshot"]
+    env.__dict__.update(state)
+    env._core = _Episodes(m, env.task, _snap.checked_params(snap))
+    env.restore(snap)
 
 
 def register() -> None:

@@ -16,6 +16,9 @@ pub enum Failure {
     Param(Error),
     /// [`Failure::Param`] of element `i` of a list argument named by the string.
     ParamIn(&'static str, usize, Error),
+    /// [`Failure::Param`] inside a structured argument named by the string (a snapshot:
+    /// `snapshot["state"]`); the message starts with that name, `field` is the model's.
+    ParamAt(String, Error),
     /// A parameter file that cannot be read or parsed (`ParamsFileError`): the message
     /// names the file and, for syntax errors, the line and column.
     File(String),
@@ -94,9 +97,10 @@ impl Failure {
         let tuple = |items: Vec<Bound<'py, PyAny>>| PyTuple::new(py, items);
         let r = (|| -> PyResult<PyErr> {
             Ok(match self {
-                Failure::Param(_) | Failure::ParamIn(..) => {
+                Failure::Param(_) | Failure::ParamIn(..) | Failure::ParamAt(..) => {
                     let (e, msg) = match self {
                         Failure::ParamIn(list, i, e) => (e, format!("{list}[{i}]: {e}")),
+                        Failure::ParamAt(at, e) => (e, format!("{at}: {e}")),
                         Failure::Param(e) => (e, e.to_string()),
                         _ => return Err(PyRuntimeError::new_err("unreachable")),
                     };

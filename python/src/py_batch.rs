@@ -8,6 +8,8 @@ use crate::arrays::{array, tables_dict};
 use crate::errors::{py_result, Failure, Fallible};
 use crate::py_params::params_from_dict_unchecked;
 use crate::rollout::{self, mode_code, Inputs, Setup};
+use crate::sim::Sim;
+use crate::snapshot;
 use crane_model::{Config, Crane, Extensions, State};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -170,9 +172,12 @@ pub fn rollouts<'py>(
 /// Simulators stepped together: `CraneBatch(params_list, h=1e-3, law="hybrid", state=None,
 /// *, gamma=1000.0, stiction=None)`. `step(u)` advances all of them in Rust (in parallel
 /// for large batches) with the GIL released; the vector environment is built on it.
+///
+/// Full snapshots (issue 23's `get_state` / `set_state`): `snapshot()`, `restore(snapshot)`,
+/// `CraneBatch.from_snapshot(snapshot)`; `pickle` goes through them.
 #[pyclass(module = "crane_twin._native", name = "CraneBatch")]
 pub struct PyCraneBatch {
-    cranes: Vec<Crane>,
+    cranes: Vec<Sim>,
     setups: Vec<Setup>,
 }
 
@@ -194,11 +199,51 @@ impl PyCraneBatch {
     ) -> PyResult<Self> {
         let setups = setups_from(py, params_list, h, law, state, gamma, stiction)?;
         let cranes = py_result(py, build_all(&setups))?;
+        Ok(PyCraneBatch {
+            cranes: cranes.into_iter().map(Sim::new).collect(),
+            setups,
+        })
+    }
+
+    /// A full snapshot of every simulator (what issue 23 calls `get_state`): the dict
+    /// `{"format": "crane_twin.CraneBatch", "version": 1, "sims": [...]}` with one
+    /// `Crane.snapshot()` dict per simulator (its parameters, stiction and initial state as
+    /// `reset_sim` left them, state, modes, step count, last input). Plain Python values:
+    /// picklable and JSON-serialisable.
+    fn snapshot<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        snapshot::batch_to_dict(py, &self.cranes, &self.setups)
+    }
+
+    /// Replaces every simulator by those of `snapshot` (a dict from `snapshot()`; the batch
+    /// takes its length), which then continue bit for bit (what issue 23 calls `set_state`).
+    /// A missing, unknown or malformed key raises `InputError` naming it
+    /// (`snapshot["sims"][2]["state"]`), a value the model refuses `ParameterError`; on error
+    /// nothing changes.
+    fn restore(&mut self, py: Python<'_>, snapshot: &Bound<'_, PyAny>) -> PyResult<()> {
+        let (cranes, setups) = snapshot::batch_from_dict(py, snapshot, "snapshot")?;
+        self.cranes = cranes;
+        self.setups = setups;
+        Ok(())
+    }
+
+    /// A new batch from a `snapshot()` dict (see `restore`).
+    #[staticmethod]
+    fn from_snapshot(py: Python<'_>, snapshot: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let (cranes, setups) = snapshot::batch_from_dict(py, snapshot, "snapshot")?;
         Ok(PyCraneBatch { cranes, setups })
     }
 
+    /// Pickling: `CraneBatch.from_snapshot(self.snapshot())`, exact.
+    fn __reduce__<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyDict>,))> {
+        let ctor = py.get_type::<PyCraneBatch>().getattr("from_snapshot")?;
+        Ok((ctor, (self.snapshot(py)?,)))
+    }
+
     /// An exact copy of every simulator (`copy.copy`, `copy.deepcopy`): both batches continue
-    /// bit for bit alike. Pickling is not offered.
+    /// bit for bit alike.
     fn __copy__(&self) -> Self {
         PyCraneBatch {
             cranes: self.cranes.clone(),
@@ -238,7 +283,7 @@ impl PyCraneBatch {
         py_result(py, all_finite("u", &data, &shape))?;
         let cranes = &mut self.cranes;
         let result: Result<(), Failure> = py.detach(|| {
-            let one = |(i, (c, u)): (usize, (&mut Crane, &[f64]))| -> Result<(), Failure> {
+            let one = |(i, (c, u)): (usize, (&mut Sim, &[f64]))| -> Result<(), Failure> {
                 for k in 0..substeps {
                     c.step([u[0], u[1], u[2]]).map_err(|err| Failure::Step {
                         err,
@@ -301,7 +346,7 @@ impl PyCraneBatch {
             Extensions::default()
         };
         let crane = py_result(py, setup.build().map_err(Failure::Param))?;
-        self.cranes[i] = crane;
+        self.cranes[i] = Sim::new(crane);
         self.setups[i] = setup;
         Ok(())
     }
@@ -311,7 +356,7 @@ impl PyCraneBatch {
     fn states<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let mut v = Vec::with_capacity(self.cranes.len() * 10);
         for c in &self.cranes {
-            let s = c.state();
+            let s = c.crane().state();
             v.extend_from_slice(&s.q);
             v.extend_from_slice(&s.qd);
         }
@@ -323,7 +368,7 @@ impl PyCraneBatch {
     fn payload<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let mut v = Vec::with_capacity(self.cranes.len() * 3);
         for c in &self.cranes {
-            v.extend_from_slice(&c.state().payload());
+            v.extend_from_slice(&c.crane().state().payload());
         }
         array(py, v, &[self.cranes.len(), 3])
     }

@@ -6,7 +6,9 @@ use crate::errors::{py_result, Failure};
 use crate::py_params::PyParams;
 use crate::rollout as run;
 use crate::rollout::{mode_code, Setup};
-use crane_model::{Config, Crane};
+use crate::sim::Sim;
+use crate::snapshot;
+use crane_model::Config;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -56,9 +58,13 @@ pub fn inputs_2d(py: Python<'_>, u: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
 /// `Crane(params=None, h=1e-3, law="hybrid", state=None, *, gamma=1000.0, stiction=None)`.
 /// State vectors are `[x, y, L, alpha, beta, xd, yd, Ld, alphad, betad]` [m, rad, m/s,
 /// rad/s]; inputs `[u_x, u_y, u_l]` [V], saturated to +-12 V.
+///
+/// Full snapshots (issue 23's `get_state` / `set_state`): `snapshot()` returns a dict of plain
+/// values, `restore(snapshot)` and `Crane.from_snapshot(snapshot)` continue from it bit for
+/// bit; `pickle` goes through them. `state` is only the physical state vector.
 #[pyclass(module = "crane_twin._native", name = "Crane")]
 pub struct PyCrane {
-    crane: Crane,
+    sim: Sim,
     setup: Setup,
 }
 
@@ -77,16 +83,60 @@ impl PyCrane {
     ) -> PyResult<Self> {
         let setup = setup_from(py, params, h, law, state, gamma, stiction)?;
         let crane = py_result(py, setup.build().map_err(Failure::Param))?;
-        Ok(PyCrane { crane, setup })
+        Ok(PyCrane {
+            sim: Sim::new(crane),
+            setup,
+        })
     }
 
     /// An exact copy: same parameters, state, modes, step count and input history, so both
-    /// continue bit for bit alike (`copy.copy`, `copy.deepcopy`). Pickling is not offered.
+    /// continue bit for bit alike (`copy.copy`, `copy.deepcopy`; `pickle` too, through
+    /// `snapshot`).
     fn __copy__(&self) -> Self {
         PyCrane {
-            crane: self.crane.clone(),
+            sim: self.sim.clone(),
             setup: self.setup.clone(),
         }
+    }
+
+    /// A full snapshot (what issue 23 calls `get_state`): a dict of plain Python values
+    /// (picklable, JSON-serialisable) holding the parameters, `h`, `law`, `gamma`, `stiction`,
+    /// the initial state `init` (for `reset()`), the `state` (10 values [m, rad, m/s,
+    /// rad/s]), `modes` (-1, 0, 1 per drive axis), `steps` and the last input `u_last` [V],
+    /// tagged `format = "crane_twin.Crane"`, `version = 1`. Not the `state` property (the
+    /// physical state vector only).
+    fn snapshot<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        snapshot::crane_to_dict(py, &self.sim, &self.setup)
+    }
+
+    /// Puts this simulator where `snapshot` (a dict from `snapshot()`, of any `Crane`) says
+    /// (what issue 23 calls `set_state`): parameters, step, law, state, modes, step count and
+    /// last input; it then continues bit for bit as the simulator the snapshot was taken of.
+    /// A missing, unknown or malformed key raises `InputError` naming it
+    /// (`snapshot["modes"]`), a value the model refuses `ParameterError`; on error nothing
+    /// changes.
+    fn restore(&mut self, py: Python<'_>, snapshot: &Bound<'_, PyAny>) -> PyResult<()> {
+        let (sim, setup) = snapshot::crane_from_dict(py, snapshot, "snapshot")?;
+        self.sim = sim;
+        self.setup = setup;
+        Ok(())
+    }
+
+    /// A new simulator from a `snapshot()` dict (see `restore`).
+    #[staticmethod]
+    fn from_snapshot(py: Python<'_>, snapshot: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let (sim, setup) = snapshot::crane_from_dict(py, snapshot, "snapshot")?;
+        Ok(PyCrane { sim, setup })
+    }
+
+    /// Pickling: `Crane.from_snapshot(self.snapshot())`, exact (a versioned dict of plain
+    /// values; see `snapshot`).
+    fn __reduce__<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyDict>,))> {
+        let ctor = py.get_type::<PyCrane>().getattr("from_snapshot")?;
+        Ok((ctor, (self.snapshot(py)?,)))
     }
 
     /// See `__copy__` (a `Crane` holds no Python object, so `memo` is not needed).
@@ -121,7 +171,7 @@ impl PyCrane {
             if k % SIGNAL_STEPS == SIGNAL_STEPS - 1 {
                 py.check_signals()?;
             }
-            self.crane.step(u).map_err(|err| {
+            self.sim.step(u).map_err(|err| {
                 Failure::Step {
                     err,
                     step: k,
@@ -130,7 +180,7 @@ impl PyCrane {
                 .into_pyerr(py)
             })?;
         }
-        state_array(py, &self.crane.state())
+        state_array(py, &self.sim.crane().state())
     }
 
     /// Rolls out over the inputs `u` of shape `(n, 3)` from the current state (the GIL is
@@ -141,15 +191,15 @@ impl PyCrane {
         u: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let data = inputs_2d(py, u)?;
-        let t0 = self.crane.steps();
-        let mut crane = self.crane.clone();
+        let t0 = self.sim.steps();
+        let mut sim = self.sim.clone();
         let result = py.detach(|| {
-            let r = run::rollout(&mut crane, &data);
-            (r, crane)
+            let r = run::rollout(&mut sim, &data);
+            (r, sim)
         });
-        self.crane = result.1;
+        self.sim = result.1;
         let tables = py_result(py, result.0)?;
-        tables_dict(py, tables, self.crane.h(), t0, false)
+        tables_dict(py, tables, self.sim.crane().h(), t0, false)
     }
 
     /// Back to a new simulator (step count 0) at `state` (default: the initial state).
@@ -159,7 +209,7 @@ impl PyCrane {
         if state.is_some_and(|s| !s.is_none()) {
             setup.init = state_arg(py, state, "state")?;
         }
-        self.crane = py_result(py, setup.build().map_err(Failure::Param))?;
+        self.sim = Sim::new(py_result(py, setup.build().map_err(Failure::Param))?);
         Ok(())
     }
 
@@ -167,19 +217,19 @@ impl PyCrane {
     /// (`ParameterError` naming `state.q[i]`) and derives the modes from the velocities.
     #[getter]
     fn state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        state_array(py, &self.crane.state())
+        state_array(py, &self.sim.crane().state())
     }
 
     #[setter(state)]
     fn set_state(&mut self, py: Python<'_>, value: &Bound<'_, PyAny>) -> PyResult<()> {
         let s = state_arg(py, Some(value), "state")?;
-        py_result(py, self.crane.set_state(s).map_err(Failure::Param))
+        py_result(py, self.sim.set_state(s).map_err(Failure::Param))
     }
 
     /// Modes of X, Y, rope: -1 moving negative, 0 stopped (held by friction), 1 positive.
     #[getter]
     fn modes(&self) -> (i8, i8, i8) {
-        let m = self.crane.modes().map(mode_code);
+        let m = self.sim.modes().map(mode_code);
         (m[0], m[1], m[2])
     }
 
@@ -187,7 +237,7 @@ impl PyCrane {
     /// [N] (3,), `tension` [N], `payload` position [m] (3,).
     #[getter]
     fn output<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let o = self.crane.output().map_err(|err| {
+        let o = self.sim.crane().output().map_err(|err| {
             Failure::Step {
                 err,
                 step: 0,
@@ -212,19 +262,19 @@ impl PyCrane {
     /// Simulated time [s].
     #[getter]
     fn time(&self) -> f64 {
-        self.crane.time()
+        self.sim.time()
     }
 
     /// Accepted steps.
     #[getter]
     fn steps(&self) -> u64 {
-        self.crane.steps()
+        self.sim.steps()
     }
 
     /// Step [s].
     #[getter]
     fn h(&self) -> f64 {
-        self.crane.h()
+        self.sim.crane().h()
     }
 
     /// The parameters.
@@ -238,9 +288,9 @@ impl PyCrane {
     fn __repr__(&self) -> String {
         format!(
             "Crane(h={}, law={:?}, t={} s)",
-            self.crane.h(),
+            self.sim.crane().h(),
             self.setup.config.law,
-            self.crane.time()
+            self.sim.time()
         )
     }
 }
@@ -261,8 +311,8 @@ pub fn rollout_fn<'py>(
     stiction: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let setup = setup_from(py, params, h, law, state, gamma, stiction)?;
-    let mut crane = py_result(py, setup.build().map_err(Failure::Param))?;
+    let mut sim = Sim::new(py_result(py, setup.build().map_err(Failure::Param))?);
     let data = inputs_2d(py, u)?;
-    let tables = py_result(py, py.detach(|| run::rollout(&mut crane, &data)))?;
+    let tables = py_result(py, py.detach(|| run::rollout(&mut sim, &data)))?;
     tables_dict(py, tables, h, 0, false)
 }

@@ -179,7 +179,7 @@ impl PyParams {
     }
 
     /// The nested dict of every field (axis tables `x`, `y`, `rope` as dicts).
-    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+    pub fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let mut p = self.inner;
         let d = PyDict::new(py);
         for name in fields::TOP {

@@ -8,6 +8,7 @@
 //! `crane simulate` does.
 
 use crate::errors::{Failure, Fallible};
+use crate::sim::Sim;
 use crane_model::{Config, Crane, Extensions, Mode, Params, State, StepError};
 use rayon::prelude::*;
 
@@ -121,7 +122,8 @@ impl Tables {
     }
 }
 
-fn record(crane: &Crane, rows: &mut Rows<'_>, k: usize) -> Result<(), StepError> {
+fn record(sim: &Sim, rows: &mut Rows<'_>, k: usize) -> Result<(), StepError> {
+    let crane = sim.crane();
     let s = crane.state();
     let o = crane.output()?;
     rows.q[k * 5..k * 5 + 5].copy_from_slice(&s.q);
@@ -135,25 +137,25 @@ fn record(crane: &Crane, rows: &mut Rows<'_>, k: usize) -> Result<(), StepError>
     Ok(())
 }
 
-/// Steps `crane` through the inputs `u` (`n` rows of `[u_x, u_y, u_l]` [V], flattened),
-/// filling `n + 1` rows; on a rejected step returns its index (the crane stays at the state
-/// before it; rows after it are left as they were).
-fn run_rows(crane: &mut Crane, u: &[f64], rows: &mut Rows<'_>) -> Result<(), (usize, StepError)> {
-    record(crane, rows, 0).map_err(|e| (0, e))?;
+/// Steps `sim` through the inputs `u` (`n` rows of `[u_x, u_y, u_l]` [V], flattened),
+/// filling `n + 1` rows; on a rejected step returns its index (the simulator stays at the
+/// state before it; rows after it are left as they were).
+fn run_rows(sim: &mut Sim, u: &[f64], rows: &mut Rows<'_>) -> Result<(), (usize, StepError)> {
+    record(sim, rows, 0).map_err(|e| (0, e))?;
     for (k, uk) in u.chunks_exact(3).enumerate() {
-        crane.step([uk[0], uk[1], uk[2]]).map_err(|e| (k, e))?;
-        record(crane, rows, k + 1).map_err(|e| (k, e))?;
+        sim.step([uk[0], uk[1], uk[2]]).map_err(|e| (k, e))?;
+        record(sim, rows, k + 1).map_err(|e| (k, e))?;
     }
     Ok(())
 }
 
-/// One rollout of `crane` over `u` (`n * 3` values), continuing from its current state.
-pub fn rollout(crane: &mut Crane, u: &[f64]) -> Fallible<Tables> {
+/// One rollout of `sim` over `u` (`n * 3` values), continuing from its current state.
+pub fn rollout(sim: &mut Sim, u: &[f64]) -> Fallible<Tables> {
     let n = u.len() / 3;
     let mut t = Tables::new(1, n + 1)?;
     let mut rows = t.split();
     if let Some(r) = rows.first_mut() {
-        run_rows(crane, u, r).map_err(|(step, err)| Failure::Step {
+        run_rows(sim, u, r).map_err(|(step, err)| Failure::Step {
             err,
             step,
             sim: None,
@@ -187,8 +189,8 @@ pub fn rollouts(setups: &[Setup], inputs: Inputs<'_>, n: usize) -> Fallible<Tabl
                 Inputs::Shared(u) => u,
                 Inputs::Each(u) => &u[i * per..(i + 1) * per],
             };
-            let mut crane = setup.build().map_err(Failure::Param)?;
-            run_rows(&mut crane, u, r).map_err(|(step, err)| Failure::Step {
+            let mut sim = Sim::new(setup.build().map_err(Failure::Param)?);
+            run_rows(&mut sim, u, r).map_err(|(step, err)| Failure::Step {
                 err,
                 step,
                 sim: Some(i),
