@@ -2,13 +2,14 @@
 ``get_state`` / ``set_state`` on the env), used by ``snapshot()``, ``restore()`` and pickling
 of :class:`crane_twin.envs.CraneAntiSwayEnv` and :class:`crane_twin.envs.CraneAntiSwayVectorEnv`.
 
-A snapshot is a dict of plain values (it pickles, and goes through ``json``), version 1:
+A snapshot is a dict of plain values (it pickles, and goes through ``json``), version 2 (version 1,
+before the Task options of issue 23, is not read: its task has fewer fields):
 
 ======================  ==========================================================================
 key                     value
 ======================  ==========================================================================
 ``format``              ``"crane_twin.CraneAntiSwayEnv"`` or ``"crane_twin.CraneAntiSwayVectorEnv"``
-``version``             ``1``
+``version``             ``2``
 ``task``                the :class:`~crane_twin.envs.Task` as a dict (must equal the env's own)
 ``params``              the nominal parameters (``Params.to_dict()``; must equal the env's own)
 ``batch``               ``CraneBatch.snapshot()`` of the ``m`` simulators (1 for the single env)
@@ -17,6 +18,11 @@ key                     value
 ``t``                   ``m`` periods taken in the current episodes
 ``episodes``            per env, None or the draw of its episode: ``params`` (dict), ``stiction``,
                         ``state`` (10 values), ``target``
+``hold``                ``m`` counts of consecutive periods meeting the success criterion
+``randomized``          ``m`` rows of the episodes' drawn values (``randomized_names(task)`` order)
+``noise_rngs``          per env, None or the bit-generator state of its episode's noise generator
+``fifo``                None (no latency) or the latency FIFOs, ``m`` x ``k`` x 12 observations
+``fifo_head``           the FIFOs' next read and write position (0 without latency)
 ``rng``                 single env: the state of ``np_random``'s bit generator (or None)
 ``np_random_seed``      single env: Gymnasium's ``np_random_seed`` (or None)
 ``started``             single env: whether ``step`` may be called
@@ -40,13 +46,16 @@ from ._native import CraneBatch, Params
 from .errors import InputError, ParameterError
 
 #: The snapshot version written and read.
-VERSION = 1
+VERSION = 2
 #: ``format`` of a ``CraneAntiSwayEnv`` snapshot.
 SINGLE_FORMAT = "crane_twin.CraneAntiSwayEnv"
 #: ``format`` of a ``CraneAntiSwayVectorEnv`` snapshot.
 VECTOR_FORMAT = "crane_twin.CraneAntiSwayVectorEnv"
 #: Keys both environments' snapshots have (the episodes' state).
-CORE_KEYS = ("task", "params", "batch", "targets", "prev", "t", "episodes")
+CORE_KEYS = (
+    "task", "params", "batch", "targets", "prev", "t", "episodes",
+    "hold", "randomized", "noise_rngs", "fifo", "fifo_head",
+)
 #: Every key of a ``CraneAntiSwayEnv`` snapshot.
 SINGLE_KEYS = ("format", "version") + CORE_KEYS + ("rng", "np_random_seed", "started")
 #: Every key of a ``CraneAntiSwayVectorEnv`` snapshot.
@@ -57,14 +66,18 @@ def _name(key: str) -> str:
     return f'snapshot["{key}"]'
 
 
+def _plain(v: Any) -> Any:
+    return [_plain(e) for e in v] if isinstance(v, (tuple, list)) else v
+
+
 def task_dict(task: Any) -> dict:
-    """The task's fields, ranges as lists (as they come back from JSON too)."""
-    return {k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(task).items()}
+    """The task's fields, tuples (also nested) as lists (as they come back from JSON too)."""
+    return {k: _plain(v) for k, v in dataclasses.asdict(task).items()}
 
 
 def rng_state(rng: Optional[np.random.Generator]) -> Optional[dict]:
     """The bit generator's state of ``rng`` (a dict of ints and strings), or None."""
-    return None if rng is None else copy.deepcopy(rng.bit_generator.state)
+    return None if rng is None else dict(copy.deepcopy(rng.bit_generator.state))
 
 
 def rng_from(state: Any, name: str) -> Optional[np.random.Generator]:
@@ -158,6 +171,11 @@ def core_snapshot(core: Any) -> dict:
         "prev": core.prev.tolist(),
         "t": [int(v) for v in core.t],
         "episodes": [_episode_dict(e) for e in core.episodes],
+        "hold": [int(v) for v in core.hold],
+        "randomized": core.drawn.tolist(),
+        "noise_rngs": [rng_state(r) for r in core.noise_rngs],
+        "fifo": None if core.fifo is None else core.fifo.tolist(),
+        "fifo_head": int(core.head),
     }
 
 
@@ -202,10 +220,41 @@ def core_values(core: Any, snap: dict) -> dict:
     t = array(snap, "t", (m,), np.int64)
     if np.any(t < 0):
         raise InputError(f"`{_name('t')}`: periods must be >= 0")
+    hold = array(snap, "hold", (m,), np.int64)
+    if np.any(hold < 0):
+        raise InputError(f"`{_name('hold')}`: counts must be >= 0")
+    noise = snap["noise_rngs"]
+    if not isinstance(noise, list) or len(noise) != m:
+        raise InputError(f"`{_name('noise_rngs')}`: expected a list of {m} entries")
+    noise_rngs = [rng_from(r, f"{_name('noise_rngs')}[{i}]") for i, r in enumerate(noise)]
+    noisy = core.task.obs_noise_std is not None
+    for i, (r, e) in enumerate(zip(noise_rngs, episodes)):
+        if not noisy and r is not None:
+            raise InputError(f"`{_name('noise_rngs')}`: this env's task has no observation noise")
+        if noisy and r is None and e is not None:
+            raise InputError(
+                f"`{_name('noise_rngs')}[{i}]`: an episode with observation noise needs its "
+                f"noise generator's state"
+            )
+    k = core.task.obs_latency
+    if k == 0:
+        if snap["fifo"] is not None:
+            raise InputError(f"`{_name('fifo')}`: this env's task has no latency (expected None)")
+        fifo = None
+    else:
+        fifo = array(snap, "fifo", (m, k, 12))
+    head = snap["fifo_head"]
+    if not (isinstance(head, int) and not isinstance(head, bool) and 0 <= head < max(k, 1)):
+        raise InputError(f"`{_name('fifo_head')}` must be an int in [0, {max(k, 1)}) (got {head!r})")
     return {
         "batch": batch,
         "targets": array(snap, "targets", (m, 2)),
         "prev": array(snap, "prev", (m, 5)),
         "t": t,
         "episodes": [_episode_from(e, f"{_name('episodes')}[{i}]") for i, e in enumerate(episodes)],
+        "hold": hold,
+        "drawn": array(snap, "randomized", (m, len(core.names))),
+        "noise_rngs": noise_rngs,
+        "fifo": fifo,
+        "head": head,
     }

@@ -7,22 +7,28 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
+from typing_extensions import TypeAlias, final
 
+__all__ = ["Params", "Crane", "CraneBatch", "rollout", "rollouts", "linearize", "U_MAX"]
+
+#: The saturation of every input voltage [V] (12).
 U_MAX: float
 
-ArrayLike = npt.ArrayLike
-FloatArray = npt.NDArray[np.float64]
+# The aliases below exist in the stub only (private names: no runtime counterpart).
+_ArrayLike: TypeAlias = npt.ArrayLike
+_FloatArray: TypeAlias = npt.NDArray[np.float64]
 #: A ``Params``, a TOML parameter file path, a nested dict (missing fields keep defaults), or None (defaults).
-ParamsLike = Union["Params", str, "os.PathLike[str]", Dict[str, Any], None]
+_ParamsLike: TypeAlias = Union["Params", str, "os.PathLike[str]", Dict[str, Any], None]
 #: None (off), ``(ratio, velocity)`` for X and Y, or 3 entries (X, Y, rope) each None or ``(ratio, velocity)``.
-StictionLike = Union[None, Tuple[float, float], Sequence[Optional[Tuple[float, float]]]]
+_StictionLike: TypeAlias = Union[None, Tuple[float, float], Sequence[Optional[Tuple[float, float]]]]
 #: 10 values ``[x, y, L, alpha, beta, xd, yd, Ld, alphad, betad]``, shape (2, 5), or ``{"q": 5 values, "qd": 5 values}``.
-StateLike = Union[ArrayLike, Dict[str, ArrayLike], None]
+_StateLike: TypeAlias = Union[_ArrayLike, Dict[str, _ArrayLike], None]
 
+@final
 class Params:
     """Validated model parameters (SI); immutable; equal by value; picklable."""
 
-    def __init__(self, **fields: Any) -> None: ...
+    def __new__(cls, **fields: Any) -> Params: ...
     @staticmethod
     def from_toml(text: str, origin: str = "<string>") -> Params: ...
     @staticmethod
@@ -35,9 +41,10 @@ class Params:
     def replace(self, changes: Dict[str, Union[float, Sequence[float]]]) -> Params: ...
     @staticmethod
     def names() -> List[str]: ...
-    def __getitem__(self, name: str) -> Union[float, List[float]]: ...
-    def __eq__(self, other: object) -> bool: ...
+    def __getitem__(self, name: str, /) -> Union[float, List[float]]: ...
+    def __eq__(self, other: object, /) -> bool: ...
 
+@final
 class Crane:
     """One simulator (hybrid or tanh friction, fixed step ``h`` [s]).
 
@@ -60,28 +67,28 @@ class Crane:
     def from_snapshot(snapshot: Dict[str, Any]) -> "Crane":
         """A new simulator from ``snapshot()`` (``pickle`` uses it)."""
 
-    def __init__(
-        self,
-        params: ParamsLike = None,
+    def __new__(
+        cls,
+        params: _ParamsLike = None,
         h: float = 1e-3,
         law: str = "hybrid",
-        state: StateLike = None,
+        state: _StateLike = None,
         *,
         gamma: float = 1000.0,
-        stiction: StictionLike = None,
-    ) -> None: ...
-    def step(self, u: Sequence[float]) -> FloatArray: ...
-    def advance(self, u: Sequence[float], n: int) -> FloatArray: ...
-    def rollout(self, u: ArrayLike) -> Dict[str, np.ndarray]: ...
-    def reset(self, state: StateLike = None) -> None: ...
+        stiction: _StictionLike = None,
+    ) -> Crane: ...
+    def step(self, u: Sequence[float]) -> _FloatArray: ...
+    def advance(self, u: Sequence[float], n: int) -> _FloatArray: ...
+    def rollout(self, u: _ArrayLike) -> Dict[str, np.ndarray]: ...
+    def reset(self, state: _StateLike = None) -> None: ...
     @property
-    def state(self) -> FloatArray: ...
+    def state(self) -> _FloatArray: ...
     @state.setter
-    def state(self, value: StateLike) -> None: ...
+    def state(self, value: _StateLike) -> None: ...
     @property
     def modes(self) -> Tuple[int, int, int]: ...
     @property
-    def output(self) -> Dict[str, Union[float, FloatArray]]: ...
+    def output(self) -> Dict[str, Union[float, _FloatArray]]: ...
     @property
     def time(self) -> float: ...
     @property
@@ -91,6 +98,7 @@ class Crane:
     @property
     def params(self) -> Params: ...
 
+@final
 class CraneBatch:
     """Simulators stepped together in Rust (the vector environment's engine).
 
@@ -109,62 +117,62 @@ class CraneBatch:
     def from_snapshot(snapshot: Dict[str, Any]) -> "CraneBatch":
         """A new batch from ``snapshot()`` (``pickle`` uses it)."""
 
-    def __init__(
-        self,
-        params_list: Sequence[ParamsLike],
+    def __new__(
+        cls,
+        params_list: Sequence[_ParamsLike],
         h: float = 1e-3,
         law: str = "hybrid",
-        state: Union[StateLike, ArrayLike] = None,
+        state: Union[_StateLike, _ArrayLike] = None,
         *,
         gamma: float = 1000.0,
-        stiction: StictionLike = None,
-    ) -> None: ...
+        stiction: _StictionLike = None,
+    ) -> CraneBatch: ...
     def __len__(self) -> int: ...
-    def step(self, u: ArrayLike, substeps: int = 1) -> FloatArray: ...
+    def step(self, u: _ArrayLike, substeps: int = 1) -> _FloatArray: ...
     def reset_sim(
-        self, i: int, params: ParamsLike = None, state: StateLike = None, stiction: StictionLike = None
+        self, i: int, params: _ParamsLike = None, state: _StateLike = None, stiction: _StictionLike = None
     ) -> None: ...
     @property
-    def states(self) -> FloatArray: ...
+    def states(self) -> _FloatArray: ...
     @property
-    def payload(self) -> FloatArray: ...
+    def payload(self) -> _FloatArray: ...
     @property
     def modes(self) -> npt.NDArray[np.int8]: ...
 
 def rollout(
-    u: ArrayLike,
-    params: ParamsLike = None,
+    u: _ArrayLike,
+    params: _ParamsLike = None,
     h: float = 1e-3,
     law: str = "hybrid",
-    state: StateLike = None,
+    state: _StateLike = None,
     *,
     gamma: float = 1000.0,
-    stiction: StictionLike = None,
+    stiction: _StictionLike = None,
 ) -> Dict[str, np.ndarray]:
     """Keys: ``t`` (n+1,), ``q``, ``qd`` (n+1, 5), ``modes`` int8 (n+1, 3), ``friction`` (n+1, 3),
     ``tension`` (n+1,), ``payload`` (n+1, 3)."""
 
 def rollouts(
-    params_list: Sequence[ParamsLike],
-    u: ArrayLike,
+    params_list: Sequence[_ParamsLike],
+    u: _ArrayLike,
     threads: Optional[int] = None,
     h: float = 1e-3,
     law: str = "hybrid",
-    state: Union[StateLike, ArrayLike] = None,
+    state: Union[_StateLike, _ArrayLike] = None,
     *,
     gamma: float = 1000.0,
-    stiction: StictionLike = None,
+    stiction: _StictionLike = None,
 ) -> Dict[str, np.ndarray]:
     """As ``rollout`` with a leading simulation axis (``t`` stays (n+1,))."""
 
 def linearize(
-    params: ParamsLike,
-    state: StateLike,
+    params: _ParamsLike,
+    state: _StateLike,
     u: Sequence[float],
     *,
-    stiction: StictionLike = None,
+    stiction: _StictionLike = None,
     eps: float = 1e-6,
-) -> Tuple[FloatArray, FloatArray]:
+) -> Tuple[_FloatArray, _FloatArray]:
     """``(A, B)``, ``(10, 10)`` and ``(10, 3)``: the Jacobians of the hybrid model's
     continuous-time right-hand side ``dx/dt = f(x, u)`` at ``(state, u)`` by central finite
     differences (steps ``eps * max(1, |v|)``), for python-control (``control.ss(A, B, C, D)``).

@@ -154,9 +154,9 @@ def test_reset_options_set_the_target_and_unknown_ones_are_refused():
     # the rest of the seeded episode is the one drawn without the option
     obs0, _ = CraneAntiSwayEnv(episode_steps=10).reset(seed=7)
     np.testing.assert_array_equal(obs[:10], obs0[:10])
-    with pytest.raises(ValueError, match="not known"):
+    with pytest.raises(ct.InputError, match="not known"):
         env.reset(options={"goal": (0.2, 0.3)})
-    with pytest.raises(ValueError, match="outside"):
+    with pytest.raises(ct.InputError, match="outside"):
         env.reset(options={"target": (5.0, 0.3)})
     venv = CraneAntiSwayVectorEnv(num_envs=2, episode_steps=10)
     _, info = venv.reset(seed=7, options={"target": (0.25, 0.35)})
@@ -164,7 +164,10 @@ def test_reset_options_set_the_target_and_unknown_ones_are_refused():
 
 
 def test_task_ranges_are_checked_when_made_not_at_reset():
-    with pytest.raises(ValueError, match="stiction_ratio"):
+    # the package's InputError (a ValueError), at construction (more in test_env_options.py)
+    with pytest.raises(ct.InputError, match="stiction_ratio"):
         ct.envs.Task(stiction_ratio=(0.5, 0.9))
-    with pytest.raises(ValueError, match="payload_kg"):
+    with pytest.raises(ct.InputError, match="payload_kg"):
         ct.envs.Task(payload_kg=(0.0, 0.5))
+    with pytest.raises(ct.InputError, match="stiction_ratio"):
+        CraneAntiSwayEnv(stiction_ratio=(0.5, 0.9))
