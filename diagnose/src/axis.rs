@@ -707,6 +707,7 @@ pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Dia
         nmae_fit: f64::NAN,
         nmae_held_out: 100.0 * mae0 / hrange,
         nmae_noise: 0.0,
+        nmae_own_log: None,
         force_rms_fit_n: (ssef0 / fit.f.len() as f64).sqrt(),
         force_rms_held_out_n: (sse0 / n_h as f64).sqrt(),
         force_rel_err_held_out_pct: 100.0 * (sse0 / fnorm_h).sqrt(),

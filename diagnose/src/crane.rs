@@ -754,6 +754,7 @@ pub fn diagnose_crane(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Di
             nmae_fit: before_f[i],
             nmae_held_out: before_h[i],
             nmae_noise: noise[i],
+            nmae_own_log: None,
             force_rms_fit_n: (sumsq(&fit_g[i].r) / n_f).sqrt(),
             force_rms_held_out_n: (sse_b[i] / n_h).sqrt(),
             force_rel_err_held_out_pct: 100.0 * (sse_b[i] / sumsq(&f_all).max(1e-300)).sqrt(),

@@ -305,6 +305,16 @@ fn drive_runs(
         // a position channel refreshed every few rows is rebuilt between its fresh samples
         let refresh = crane_ident::data::timebase::held_channel(&a.x).map_or(1, |(r, _)| r);
         let x = drive::prep::unhold(&a.x, refresh);
+        let read_at = drive::prep::read_instants(&a.x, &a.source_t, refresh);
+        // instants from the cut's first sample
+        let from = |v: &[f64], lo: usize, hi: usize| -> Vec<f64> {
+            let t0 = a.t.get(lo).copied().unwrap_or(0.0);
+            v.get(lo..hi)
+                .unwrap_or_default()
+                .iter()
+                .map(|s| s - t0)
+                .collect()
+        };
         let mk = |lo: usize, hi: usize, held_out: bool| drive::DriveRun {
             name: r.name.clone(),
             held_out,
@@ -312,6 +322,8 @@ fn drive_runs(
             x: x[lo..hi].to_vec(),
             u: a.force[lo..hi].to_vec(),
             refresh,
+            input_at: from(&a.source_t, lo, hi),
+            read_at: from(&read_at, lo, hi),
         };
         match held {
             Some(h) => runs.push(mk(0, a.x.len(), h)),

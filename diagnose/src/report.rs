@@ -89,15 +89,20 @@ pub enum Verdict {
     None,
     /// The baseline is wrong and no candidate explains it.
     Unexplained,
+    /// The held-out runs cannot test the model: in none of them does the axis move, and
+    /// every model that sticks predicts a resting run (its score, 0 %, is no figure of the
+    /// motion).
+    Untested,
 }
 
 impl Verdict {
-    /// The report name: the cause's name, `none` or `unexplained`.
+    /// The report name: the cause's name, `none`, `unexplained` or `untested`.
     pub fn as_str(self) -> &'static str {
         match self {
             Verdict::Found(c) => c.as_str(),
             Verdict::None => "none",
             Verdict::Unexplained => "unexplained",
+            Verdict::Untested => "untested",
         }
     }
 }
@@ -126,6 +131,7 @@ impl<'de> Deserialize<'de> for Verdict {
         match name.as_str() {
             "none" => Ok(Verdict::None),
             "unexplained" => Ok(Verdict::Unexplained),
+            "untested" => Ok(Verdict::Untested),
             other => Cause::ALL
                 .into_iter()
                 .find(|c| c.as_str() == other)
@@ -193,6 +199,12 @@ pub struct AxisError {
     pub nmae_held_out: f64,
     /// Noise level of the NMAE [%] (crane: encoder quantisation); below it nothing is claimed.
     pub nmae_noise: f64,
+    /// Held-out NMAE [%] the baseline leaves on its own replayed log (single axis: the
+    /// baseline simulated from the recorded inputs, logged as these data were, and fitted
+    /// again; `drive::floor`): what this log and method leave with nothing missing. `null`
+    /// when not computed (crane data) or when the replay cannot be fitted.
+    #[serde(default)]
+    pub nmae_own_log: Option<f64>,
     /// RMS inverse-dynamics force residual on the fitting part [N].
     pub force_rms_fit_n: f64,
     /// RMS inverse-dynamics force residual on the held-out part [N].

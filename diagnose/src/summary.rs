@@ -22,7 +22,17 @@ impl Report {
                 serde_json::to_string(&f.parameters).unwrap_or_default()
             );
         }
-        if let Some(h) = &self.heldout_simulation {
+        if let Some(h) = self
+            .heldout_simulation
+            .as_ref()
+            .filter(|h| !h.runs.is_empty() && h.runs.iter().all(|r| !r.moves))
+        {
+            let _ = writeln!(
+                s,
+                "held-out runs simulated from the recorded input: the axis moves in none of them ({}), so none tests the motion (every model that sticks predicts a resting run)",
+                h.runs.iter().map(|r| r.file.as_str()).collect::<Vec<_>>().join(", ")
+            );
+        } else if let Some(h) = &self.heldout_simulation {
             let _ = writeln!(
                 s,
                 "held-out runs simulated from the recorded input, position NMAE: baseline {}, final model {}, no motion {:.2} % (runs that move: {} / {} / {:.2} %)",
@@ -34,14 +44,22 @@ impl Report {
                 h.moving_nmae_no_motion
             );
             for r in &h.runs {
+                if !r.moves {
+                    // a resting run is predicted by every model that sticks: no figure
+                    let _ = writeln!(
+                        s,
+                        "  {}: at rest (the axis never moves: it tests only that a model sticks, not the motion)",
+                        r.file
+                    );
+                    continue;
+                }
                 let _ = writeln!(
                     s,
-                    "  {}: {} -> {} (no motion {:.2} %){}",
+                    "  {}: {} -> {} (no motion {:.2} %)",
                     r.file,
                     pct(r.nmae_before, 2),
                     pct(r.nmae_after, 2),
-                    r.nmae_no_motion,
-                    if r.moves { "" } else { ", at rest" }
+                    r.nmae_no_motion
                 );
             }
         }

@@ -358,6 +358,14 @@ fn resting_runs_mixed_with_moving_runs() {
                     "{name}: {}",
                     r.verdict_reason
                 );
+                // and its verdict is no `none`: nothing was tested (issue 22), and the text
+                // prints no figure for a resting run
+                if !moves {
+                    assert_eq!(r.verdict, Verdict::Untested, "{name}");
+                    let text = r.summary();
+                    assert!(text.contains("moves in none of them"), "{text}");
+                    assert!(!text.contains("0.00 %"), "{text}");
+                }
             }
             Err(e) => {
                 let m = e.to_string();
@@ -666,4 +674,39 @@ fn a_single_count_of_motion_is_the_datas_limit_not_the_models() {
         }
         other => panic!("expected an input error, got {other:?}"),
     }
+}
+
+/// The own-log floor (`drive/floor.rs`) is measured on each log: with nothing hidden the
+/// baseline leaves about what it leaves on its own replayed log (so `none`), and a coarser
+/// encoder on the same motion raises the floor.
+#[test]
+fn the_own_log_floor_is_measured_on_each_log() {
+    let truth = carriage(2.0, 4.0, 4.0, 8.0);
+    let dt = 1e-3;
+    let head = "position_unit = \"m\"\ninput_unit = \"N\"";
+    let mut floors = Vec::new();
+    for q in [1e-6, 2e-3] {
+        let mut rng = Rng::new(29);
+        let logs: Vec<Log> = (0..4).map(|_| pulse_log(&mut rng, &truth, dt, q)).collect();
+        let name = format!("own_log_floor_q{q}");
+        let (out, secs) = diagnose_logs(&name, head, &logs);
+        println!("{}", line(&name, secs, &out));
+        let r = out.expect("a clean log diagnoses");
+        let e = &r.baseline_errors[0];
+        let f = e
+            .nmae_own_log
+            .expect("the floor is computed on single-axis data");
+        let held = r.heldout_simulation.as_ref().unwrap().moving_nmae_before;
+        assert!(f > 0.0 && f.is_finite(), "{name}: floor {f}");
+        assert!(
+            held <= 8.0 * f.max(e.nmae_noise),
+            "{name}: {held} vs floor {f}"
+        );
+        assert_eq!(r.verdict, Verdict::None, "{name}: {}", r.verdict_reason);
+        floors.push(f);
+    }
+    assert!(
+        floors[1] > floors[0],
+        "a coarser encoder must raise the floor: {floors:?}"
+    );
 }

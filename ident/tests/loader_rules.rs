@@ -178,7 +178,10 @@ fn irregular_stamps_are_resampled_by_zero_order_hold_and_said() {
         let last = rows.iter().rev().find(|r| r.0 <= g + 1e-12).unwrap();
         assert_eq!(a.x[k], last.1, "{k}");
         assert_eq!(a.u[k], last.2, "{k}");
+        // and when that row was taken: its own stamp, never the grid instant
+        assert_eq!(a.source_t[k], last.0, "{k}");
     }
+    assert!(a.source_t.iter().zip(&a.t).any(|(s, t)| s != t));
     assert!(a.notes[0].to_string().contains("zero-order hold"));
 }
 
@@ -238,6 +241,8 @@ fn held_channels_are_noted() {
     let a = ds.runs[0].axis().unwrap();
     assert_eq!(a.refresh_rows(), 4);
     assert!(!a.resampled());
+    // not resampled: every value was taken at its own row's instant
+    assert_eq!(a.source_t, a.t);
     match &a.notes[..] {
         [LoadNote::HeldChannel {
             column,

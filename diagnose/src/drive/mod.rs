@@ -19,6 +19,8 @@
 
 pub mod cause;
 pub mod estimate;
+pub mod experiment;
+pub mod floor;
 pub mod grid;
 pub mod local;
 pub mod plots;

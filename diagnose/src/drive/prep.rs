@@ -26,6 +26,34 @@ pub struct DriveRun {
     /// Rows per fresh sample of the position channel (1: every row is fresh; more when the
     /// logger repeats `x` between refreshes, and `x` is then [`unhold`]'s reconstruction).
     pub refresh: usize,
+    /// Per sample, when its input was taken [s from the run's first sample]: the sample's own
+    /// instant `k dt`, or for a resampled log the stamp of the file row it holds
+    /// (`crane_ident::data::AxisRun::source_t`).
+    pub input_at: Vec<f64>,
+    /// Per sample, when the logged position it rebuilds was read [s from the run's first
+    /// sample] ([`read_instants`]).
+    pub read_at: Vec<f64>,
+}
+
+/// When each logged position was read [s]: `source_t` (the stamp of the row each sample
+/// holds) for a channel fresh on every row; for a channel refreshed every `refresh` rows the
+/// stamp of its last fresh row: a row where the value changes, or, while it does not (the
+/// axis at rest, or creeping by less than a count), every `refresh` rows after the last
+/// change (the logger kept refreshing a value that did not change). `x_logged` is the channel
+/// as logged (before [`unhold`]).
+pub fn read_instants(x_logged: &[f64], source_t: &[f64], refresh: usize) -> Vec<f64> {
+    if refresh <= 1 {
+        return source_t.to_vec();
+    }
+    let mut out = Vec::with_capacity(source_t.len());
+    let mut last = 0usize;
+    for k in 0..source_t.len().min(x_logged.len()) {
+        if k == 0 || x_logged[k] != x_logged[k - 1] || k - last >= refresh {
+            last = k;
+        }
+        out.push(source_t[last]);
+    }
+    out
 }
 
 /// A position channel logged slower than its rows, rebuilt between its fresh samples: every
@@ -430,8 +458,11 @@ mod tests {
     }
 
     fn run(dt: f64, x: Vec<f64>) -> DriveRun {
+        let t: Vec<f64> = (0..x.len()).map(|k| k as f64 * dt).collect();
         DriveRun {
             refresh: 1,
+            input_at: t.clone(),
+            read_at: t,
             name: "r".into(),
             held_out: false,
             dt,
@@ -455,6 +486,21 @@ mod tests {
             })
             .collect();
         run(dt, x)
+    }
+
+    #[test]
+    fn a_held_position_was_read_at_its_last_fresh_row() {
+        let t: Vec<f64> = (0..12).map(|k| k as f64).collect();
+        // fresh every row: each sample's own instant
+        assert_eq!(read_instants(&[0.0; 12], &t, 1), t);
+        // refreshed every 3 rows: moving (changes at 3 and 6), then at rest from row 6 on,
+        // where the logger still refreshed every 3 rows
+        let x = [0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 2.0, 2.0, 2.0, 2.0, 2.0, 2.0];
+        let r = read_instants(&x, &t, 3);
+        assert_eq!(
+            r,
+            [0.0, 0.0, 0.0, 3.0, 3.0, 3.0, 6.0, 6.0, 6.0, 9.0, 9.0, 9.0]
+        );
     }
 
     #[test]

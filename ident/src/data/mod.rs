@@ -89,6 +89,11 @@ pub struct AxisRun {
     /// Time [s], strictly increasing and uniform within [`timebase::JITTER_TOLERANCE`]
     /// (resampled when the file's stamps were not, see `notes`).
     pub t: Vec<f64>,
+    /// Per sample, the time stamp [s] of the file row whose values it holds: `t` itself
+    /// unless the run was resampled, then the stamp of the row the zero-order hold picked
+    /// (at or before the grid instant). What a replay of the logging needs: when each
+    /// value was actually taken.
+    pub source_t: Vec<f64>,
     /// Position [m or rad: `position_unit`].
     pub x: Vec<f64>,
     /// Drive effort `gain * u` [N or N m] when the gain is known, else `u` itself [input
@@ -132,6 +137,7 @@ impl AxisRun {
         let cut = |v: &[f64]| v.get(start..end).unwrap_or_default().to_vec();
         AxisRun {
             t: cut(&self.t),
+            source_t: cut(&self.source_t),
             x: cut(&self.x),
             force: cut(&self.force),
             u: cut(&self.u),
@@ -426,6 +432,7 @@ pub fn axis_run(
         }
     }
     let mut out = AxisRun {
+        source_t: t.clone(),
         t,
         x,
         force,
@@ -441,6 +448,7 @@ pub fn axis_run(
         let (grid, rows) = timebase::zoh_rows(&out.t, h);
         let rows_in = out.t.len();
         out = AxisRun {
+            source_t: timebase::pick(&out.t, &rows),
             t: grid,
             x: timebase::pick(&out.x, &rows),
             force: timebase::pick(&out.force, &rows),
