@@ -94,24 +94,59 @@ ensure_venv "fmpy>=0.3.32,<0.4" pytest
 # bit for bit with `crane_twin`, which is installed there)
 # ---- end FMU ------------------------------------------------------------------------------
 
-# ---- python (issue 12): the `crane_twin` package in the shared venv, then its pytest -------
-# (bit-exactness against the `crane` CLI built above, Gymnasium check_env, seeded episodes,
-# bad input, the Ray example with 2 local workers). Measured: see BENCHMARKS.md "Python".
+# ---- python (issue 12; issue 23 "install without Rust"): the `crane_twin` wheel, built once,
+# tested as a user installs it, then its API reference --------------------------------------
+# scripts/build-wheel.sh builds the abi3 wheel (CPython >= 3.10) with maturin and zig (PyPI's
+# ziglang): manylinux2014 (glibc >= 2.17). It goes into a clean venv, new each run, with only
+# its dependencies and the test tools, and python/tests run against it with a PATH of that
+# venv's bin, /usr/bin and /bin: no cargo, no rustc (test_wheel.py checks that, and that
+# crane_twin comes from that venv's site-packages, installed from the .whl). CRANE_BIN is the
+# release `crane` built above (test_bits.py compares with it; without it the tests would
+# fail here, not build). The shared venv gets the same wheel (the FMU comparison below, the
+# API reference, the blocks after). Measured 2026-11-27 (2 shared cores, load average 3; fresh
+# venv, `crane` built, the extension not): 107 s, of which the wheel build 78 s and pytest 10 s;
+# the former block (pip install ./python, pytest in the shared venv) took 80 s. CRANE_WHEEL_ZIG=0
+# builds without zig (manylinux_2_34 tag, glibc >= 2.34): 95 s.
 python_venv() {
   # The one shared venv of the CI; created if missing (other blocks may call this too).
   local venv="${CARGO_TARGET_DIR:-target}/venv"
   [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
   (cd "$venv" && pwd)
 }
-step "python: crane_twin (venv, pip install ./python, pytest python/tests)"
+step "python: crane_twin wheel (scripts/build-wheel.sh; maturin + zig, manylinux2014)"
 venv="$(python_venv)"
 "$venv/bin/python" -m pip install -q --disable-pip-version-check \
-  maturin==1.16.0 numpy==2.4.6 gymnasium==1.4.0 ray==2.60.0 pytest==9.2.0
-# Built with the venv's maturin (its PEP 517 hook runs `maturin` from PATH).
-PATH="$venv/bin:$PATH" "$venv/bin/python" -m pip install -q --disable-pip-version-check \
-  --no-build-isolation ./python
-CRANE_BIN="$fmu_target/release/crane" RAY_USAGE_STATS_ENABLED=0 \
-  "$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests
+  maturin==1.16.0 ziglang==0.17.1 numpy==2.4.6 gymnasium==1.4.0 pytest==9.2.0 pdoc==16.0.0
+# The clean venv, new each run, has no pip of its own (the shared venv's pip installs into it,
+# 5 s less); its dependencies download and install while the wheel builds (10 s less). mypy:
+# test_stubs.py's stubtest of the installed _native.pyi (skipped without it; 5 s).
+wheel_venv="$fmu_target/venv-wheel"
+rm -rf "$wheel_venv"
+python3 -m venv --without-pip "$wheel_venv"
+wheel_pip() { "$venv/bin/python" -m pip --python "$wheel_venv/bin/python" "$@"; }
+wheel_pip install -q --disable-pip-version-check \
+  numpy==2.4.6 gymnasium==1.4.0 ray==2.60.0 pytest==9.2.0 mypy==2.4.1 > "$fmu_target/venv-wheel.log" 2>&1 &
+wheel_deps=$!
+bash scripts/build-wheel.sh "$fmu_target/wheels-ci" "$venv/bin/python" || { kill "$wheel_deps"; exit 1; }
+wheel="$(ls "$fmu_target"/wheels-ci/crane_twin-*-abi3-manylinux*_x86_64.whl)"
+ls -l "$wheel"
+wait "$wheel_deps" || { cat "$fmu_target/venv-wheel.log" >&2; exit 1; }
+wheel_pip install -q --disable-pip-version-check --no-deps "$wheel"
+wheel_pip check --disable-pip-version-check
+"$venv/bin/python" -m pip install -q --disable-pip-version-check --force-reinstall --no-deps "$wheel"
+
+step "python: the wheel in a clean venv without cargo on the PATH, pytest python/tests"
+no_rust_path="$wheel_venv/bin:/usr/bin:/bin"
+rust_found="$(env PATH="$no_rust_path" bash -c 'command -v cargo rustc rustup' || true)"
+[ -z "$rust_found" ] || { echo "Rust is reachable on $no_rust_path: $rust_found" >&2; exit 1; }
+crane_bin="$fmu_target/release/crane"
+[ -x "$crane_bin" ] || { echo "CRANE_BIN $crane_bin missing: the bit-exactness test needs it" >&2; exit 1; }
+PATH="$no_rust_path" CRANE_TWIN_WHEEL_TEST=1 CRANE_BIN="$crane_bin" RAY_USAGE_STATS_ENABLED=0 \
+  "$wheel_venv/bin/python" -m pytest -q -p no:cacheprovider python/tests
+
+step "python: API reference (pdoc) into ${CARGO_TARGET_DIR:-target}/api"
+rm -rf "$fmu_target/api"
+"$venv/bin/python" scripts/build-api-docs.py "$fmu_target/api"
 step "FMU: FMPy + pytest (against crane simulate and crane_twin)"
 CRANE_FMU="$fmu_target/crane.fmu" CRANE_BIN="$fmu_target/release/crane" \
   "$VENV_PY" -m pytest -q -p no:cacheprovider fmu/tests/test_fmu.py

@@ -32,7 +32,10 @@ def crane_cli() -> Path:
         exe = Path(given)
         assert exe.is_file(), f"CRANE_BIN={given} is not a file"
         return exe
-    if os.environ.get("CRANE_NO_BUILD") and not os.environ.get("CI"):
+    if os.environ.get("CI"):
+        # CI passes the binary it built: a build here would hide a missing CRANE_BIN
+        pytest.fail("CI is set but CRANE_BIN is not: pass the `crane` binary the CI built")
+    if os.environ.get("CRANE_NO_BUILD"):
         pytest.skip("CRANE_NO_BUILD is set: the tests against the `crane` CLI need CRANE_BIN")
     cargo = shutil.which("cargo")
     if cargo is None:
