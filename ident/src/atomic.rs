@@ -10,12 +10,88 @@
 //! root) or cut the pipe's reader off. A symbolic link is refused with an error that names
 //! its target (replacing it would break the link; following it silently would write
 //! somewhere the user did not name). A directory, a block device or a socket is refused.
+//!
+//! **Several outputs of one command** go through a [`Transaction`]: every output is staged
+//! beside its target and all are renamed into place together at the end, or none is.
+//!
+//! **Interrupted:** every temporary file or folder this module makes is registered until it
+//! is renamed into place or removed; [`remove_pending`] removes them all, and a program's
+//! Ctrl-C (SIGINT, SIGTERM) handler calls it before exiting, so a kill leaves no
+//! `.<name>.tmp-*` behind (a `SIGKILL` cannot be caught: then they stay).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Mutex;
+
+mod transaction;
+pub use transaction::Transaction;
 
 static COUNTER: AtomicU64 = AtomicU64::new(0);
+
+/// What a registered temporary path is, and so how [`remove_pending`] removes it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Pending {
+    /// A temporary file: removed.
+    File,
+    /// A scratch folder of ours: moved aside, then removed with its contents.
+    Dir,
+    /// A folder created for an output: removed only if empty.
+    EmptyDir,
+}
+
+/// Temporary paths not yet renamed into place or removed, in the order they were made.
+static PENDING: Mutex<Vec<(PathBuf, Pending)>> = Mutex::new(Vec::new());
+
+/// Registers `path` for [`remove_pending`].
+fn track(path: &Path, kind: Pending) {
+    if let Ok(mut list) = PENDING.lock() {
+        list.push((path.to_path_buf(), kind));
+    }
+}
+
+/// Forgets `path` (renamed into place, or removed).
+fn untrack(path: &Path) {
+    if let Ok(mut list) = PENDING.lock() {
+        if let Some(i) = list.iter().rposition(|(p, _)| p == path) {
+            list.remove(i);
+        }
+    }
+}
+
+/// Removes a scratch folder whole. It is first renamed to a fresh name beside it, so a
+/// thread still writing into it by path (an interrupted virtual rig) can add nothing more,
+/// and the removal cannot race with new entries.
+fn remove_tree(dir: &Path) {
+    let gone = temp_beside(dir);
+    let target = match std::fs::rename(dir, &gone) {
+        Ok(()) => gone,
+        Err(_) => dir.to_path_buf(),
+    };
+    let _ = std::fs::remove_dir_all(target);
+}
+
+/// Removes every temporary file and scratch folder this process made and has not yet
+/// renamed into place, newest first (and the output folders it created for them, when
+/// empty). For a program's interrupt handler; safe to call from any thread, at any time:
+/// nothing but the module's own temporary paths is touched.
+pub fn remove_pending() {
+    let list = match PENDING.lock() {
+        Ok(mut l) => std::mem::take(&mut *l),
+        Err(_) => return,
+    };
+    for (path, kind) in list.iter().rev() {
+        match kind {
+            Pending::File => {
+                let _ = std::fs::remove_file(path);
+            }
+            Pending::Dir => remove_tree(path),
+            Pending::EmptyDir => {
+                let _ = std::fs::remove_dir(path);
+            }
+        }
+    }
+}
 
 /// A fresh temporary path beside `path` (same directory, so the rename stays on one file
 /// system): `.<name>.tmp-<pid>-<n>`.
@@ -49,6 +125,16 @@ pub fn destination(path: &Path) -> std::io::Result<Destination> {
     let meta = match std::fs::symlink_metadata(path) {
         Ok(m) => m,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Destination::Replace),
+        Err(e) if e.kind() == std::io::ErrorKind::NotADirectory => {
+            let why = match path.parent().and_then(blocking_ancestor) {
+                Some(file) => format!(
+                    "{} exists and is not a directory, so nothing can be written below it",
+                    file.display()
+                ),
+                None => e.to_string(),
+            };
+            return Err(std::io::Error::new(std::io::ErrorKind::NotADirectory, why));
+        }
         Err(e) => return Err(e),
     };
     let ft = meta.file_type();
@@ -90,14 +176,30 @@ pub fn destination(path: &Path) -> std::io::Result<Destination> {
 
 /// Creates the output directory `dir` and its parents; an existing path that is not a
 /// directory is an error that says so (`create_dir_all` says only "File exists").
+/// A parent that is a file names that file ("out/F exists and is not a directory"), not
+/// "Not a directory (os error 20)".
 pub fn create_dir(dir: &Path) -> std::io::Result<()> {
-    if dir.exists() && !dir.is_dir() {
-        return Err(std::io::Error::new(
-            std::io::ErrorKind::AlreadyExists,
-            "exists and is not a directory: an output folder is needed here",
-        ));
+    if let Some(file) = blocking_ancestor(dir) {
+        let why = if file == dir {
+            "exists and is not a directory: an output folder is needed here".to_string()
+        } else {
+            format!(
+                "{} exists and is not a directory: an output folder is needed there",
+                file.display()
+            )
+        };
+        return Err(std::io::Error::new(std::io::ErrorKind::AlreadyExists, why));
     }
     std::fs::create_dir_all(dir)
+}
+
+/// The nearest existing path among `path` and its ancestors, when it is not a directory
+/// (then nothing can be created below it).
+fn blocking_ancestor(path: &Path) -> Option<&Path> {
+    path.ancestors()
+        .filter(|a| !a.as_os_str().is_empty())
+        .find(|a| a.exists())
+        .filter(|a| !a.is_dir())
 }
 
 /// Opens a device or FIFO for writing in place (no create, no truncate of anything else).
@@ -116,6 +218,7 @@ pub fn write(path: &Path, bytes: impl AsRef<[u8]>) -> std::io::Result<()> {
         return f.flush();
     }
     let tmp = temp_beside(path);
+    track(&tmp, Pending::File);
     let result = (|| {
         let mut f = std::fs::File::create(&tmp)?;
         f.write_all(bytes.as_ref())?;
@@ -126,6 +229,7 @@ pub fn write(path: &Path, bytes: impl AsRef<[u8]>) -> std::io::Result<()> {
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
+    untrack(&tmp);
     result
 }
 
@@ -152,6 +256,7 @@ impl AtomicFile {
             Destination::Replace => {
                 let tmp = temp_beside(path);
                 let file = std::fs::File::create(&tmp)?;
+                track(&tmp, Pending::File);
                 (Some(tmp), file)
             }
         };
@@ -165,16 +270,37 @@ impl AtomicFile {
     /// Flushes, syncs and renames the temporary file over the destination (a device or FIFO:
     /// flushes).
     pub fn commit(mut self) -> std::io::Result<()> {
+        self.finish()?;
+        match &self.tmp {
+            Some(tmp) => std::fs::rename(tmp, &self.path),
+            None => Ok(()),
+        }
+    }
+
+    /// The destination.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Flushes the writer and syncs the temporary file to disk (a device or FIFO: flushes).
+    fn finish(&mut self) -> std::io::Result<()> {
         if let Some(w) = self.file.take() {
             let f = w.into_inner().map_err(|e| e.into_error())?;
             if self.tmp.is_some() {
                 f.sync_all()?;
             }
         }
-        match &self.tmp {
-            Some(tmp) => std::fs::rename(tmp, &self.path),
-            None => Ok(()),
-        }
+        Ok(())
+    }
+
+    /// Finishes the file ([`AtomicFile::finish`]) and hands its temporary file over to a
+    /// [`Transaction`] instead of renaming it: `(destination, Some(temporary))`, or
+    /// `(destination, None)` when it was written through to a device or FIFO.
+    fn into_staged(mut self) -> std::io::Result<(PathBuf, Option<PathBuf>)> {
+        self.finish()?;
+        let tmp = self.tmp.take();
+        // registered as pending still: the transaction now owns it
+        Ok((self.path.clone(), tmp))
     }
 }
 
@@ -199,6 +325,7 @@ impl Drop for AtomicFile {
         // not committed (or the rename failed): the temporary file goes
         if let Some(tmp) = &self.tmp {
             let _ = std::fs::remove_file(tmp);
+            untrack(tmp);
         }
     }
 }

@@ -514,8 +514,14 @@ fn drive_signals(
     }
 }
 
-fn horner(c: &[f64], p: f64) -> f64 {
-    c.iter().rev().fold(0.0, |a, ci| a * p + ci).max(0.0)
+/// The model's five dry-friction coefficients `c0..c4` of a fitted polynomial (missing terms
+/// 0), for `crane_model::friction::dry` (the one polynomial evaluation, clamped at 0).
+fn poly5(v: &[f64]) -> [f64; 5] {
+    let mut a = [0.0; 5];
+    for (d, s) in a.iter_mut().zip(v) {
+        *d = *s;
+    }
+    a
 }
 
 /// Fits one dry-friction curve from `(position, force)` samples.
@@ -614,12 +620,12 @@ fn viscous_fit(
     let mut cols = Columns::new(&["Dbar+", "Dbar-"]);
     for run in ds.of_kind(kind) {
         let Some(cr) = run.crane() else { continue };
-        let (cp, cn) = (&dry_pos.coefficients, &dry_neg.coefficients);
+        let (cp, cn) = (poly5(&dry_pos.coefficients), poly5(&dry_neg.coefficients));
         let dry = |p: f64, v: f64| {
             if v > 0.0 {
-                horner(cp, p)
+                crane_model::friction::dry(&cp, p)
             } else if v < 0.0 {
-                -horner(cn, p)
+                -crane_model::friction::dry(&cn, p)
             } else {
                 0.0
             }
@@ -833,20 +839,13 @@ pub fn identify_dataset(ds: &Dataset, opt: &IdentOptions) -> Result<Identified, 
     p.trolley_mass = c.trolley_mass_kg;
     p.rail_mass = c.rail_mass_kg;
     p.gravity = c.gravity;
-    let coef = |v: &[f64]| {
-        let mut a = [0.0; 5];
-        for (d, s) in a.iter_mut().zip(v) {
-            *d = *s;
-        }
-        a
-    };
     for (ax, r, range) in [(&mut p.x, &x, c.x_range_m), (&mut p.y, &y, c.y_range_m)] {
         ax.inertia = r.inertia.value;
         ax.gain = r.gain.value;
         ax.viscous_pos = r.viscous_pos.value;
         ax.viscous_neg = r.viscous_neg.value;
-        ax.dry_pos = coef(&r.dry_pos.coefficients);
-        ax.dry_neg = coef(&r.dry_neg.coefficients);
+        ax.dry_pos = poly5(&r.dry_pos.coefficients);
+        ax.dry_neg = poly5(&r.dry_neg.coefficients);
         ax.min = range[0];
         ax.max = range[1];
     }

@@ -20,7 +20,9 @@
 //! - [`params_file`]: the model parameters as TOML.
 //! - [`shared_data`]: where the real data sets outside the repository are, for the tests
 //!   that skip without them.
-//! - [`atomic`]: atomic file writes (temporary file + rename), used for every output.
+//! - [`atomic`]: atomic file writes (temporary file + rename), used for every output, and
+//!   [`atomic::Transaction`]: the outputs of one command published together or not at all.
+//! - [`num`]: numbers in messages, short whatever their magnitude.
 //!
 //! Entry points for the command line:
 //! ```no_run
@@ -50,6 +52,7 @@ pub mod emps;
 pub mod identify;
 pub mod input;
 pub mod linalg;
+pub mod num;
 pub mod params_file;
 pub mod rig;
 pub mod rng;

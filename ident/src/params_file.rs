@@ -4,6 +4,7 @@
 //! ([`Params::validate`]) and plausible magnitudes ([`plausible`]); every error names the file,
 //! the line and the field.
 
+use crate::num::Num;
 use crane_model::Params;
 use std::path::{Path, PathBuf};
 
@@ -36,8 +37,8 @@ pub enum ParamsError {
         /// What is wrong (shortened to a few hundred characters).
         message: String,
     },
-    /// A value breaks the model's rules or is implausible.
-    #[error("{}:{line}: {error}", path.display())]
+    /// A value breaks the model's rules.
+    #[error("{}:{line}: {}", path.display(), describe(error))]
     Invalid {
         /// The file.
         path: PathBuf,
@@ -46,6 +47,31 @@ pub enum ParamsError {
         /// The field, its problem and value.
         error: crane_model::Error,
     },
+    /// A value beyond the plausible magnitudes of [`plausible`].
+    #[error("{}:{line}: `{}` = {} is beyond the plausible magnitude {} (a wrong unit?)", path.display(), error.field, Num(error.value), Num(*max))]
+    Implausible {
+        /// The file.
+        path: PathBuf,
+        /// Line of the field (1-based; 0 if it could not be found).
+        line: usize,
+        /// The field and its value.
+        error: crane_model::Error,
+        /// The largest magnitude accepted there.
+        max: f64,
+    },
+}
+
+/// The model's message for `e` with its value written short ([`Num`]: `1e308`, not 309
+/// digits).
+fn describe(e: &crane_model::Error) -> String {
+    let long = e.value.to_string();
+    let short = Num(e.value).to_string();
+    let text = e.to_string();
+    if long == short {
+        text
+    } else {
+        text.replace(&long, &short)
+    }
 }
 
 /// Coefficients of a dry-friction polynomial (`c0 .. c4`).
@@ -113,13 +139,21 @@ pub fn parse(path: &Path, text: &str) -> Result<Params, ParamsError> {
             message,
         }
     })?;
-    p.validate()
-        .and_then(|()| plausible(&p))
-        .map_err(|error| ParamsError::Invalid {
-            path: path.to_path_buf(),
-            line: line_of_field(text, error.field),
-            error,
-        })?;
+    p.validate().map_err(|error| ParamsError::Invalid {
+        path: path.to_path_buf(),
+        line: line_of_field(text, error.field),
+        error,
+    })?;
+    plausible(&p).map_err(|error| ParamsError::Implausible {
+        path: path.to_path_buf(),
+        line: line_of_field(text, error.field),
+        max: if error.field == "gravity" {
+            MAX_GRAVITY
+        } else {
+            MAX_MAGNITUDE
+        },
+        error,
+    })?;
     Ok(p)
 }
 

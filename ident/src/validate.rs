@@ -61,8 +61,9 @@ impl ValidationReport {
 #[derive(Debug, thiserror::Error)]
 pub enum SimError {
     /// The model rejected the parameters, the step or the run's first configuration (the
-    /// error names the field: `payload_mass`, `config.h`, `state.q[1]`...).
-    #[error("{0}")]
+    /// error names the field: `payload_mass`, `config.h`, or the run's column for the first
+    /// state, `x`, `alpha`...).
+    #[error("{}", setup_message(.0))]
     Setup(crane_model::Error),
     /// The model rejected a step (e.g. "mass matrix not positive definite").
     #[error("sample {sample} (t = {t} s, input u = {u:?} V): {error}")]
@@ -76,6 +77,28 @@ pub enum SimError {
         /// What the model said.
         error: crane_model::StepError,
     },
+}
+
+/// The model's message for `e`, the first state named by the run's columns (`state.q[0]` is
+/// the run's first `x`, ...) and its value short.
+fn setup_message(e: &crane_model::Error) -> String {
+    const COLUMNS: [&str; 5] = ["x", "y", "l", "alpha", "beta"];
+    let mut text = e.to_string();
+    for (i, c) in COLUMNS.iter().enumerate() {
+        text = text.replace(
+            &format!("`state.q[{i}]`"),
+            &format!("the run's first `{c}`"),
+        );
+    }
+    let long = e.value.to_string();
+    let short = crate::num::Num(e.value).to_string();
+    if long != short {
+        text = text.replace(&long, &short);
+    }
+    if e.problem == crane_model::Problem::OutOfLimits {
+        text.push_str(" of the parameters ([x], [y], [rope] min and max)");
+    }
+    text
 }
 
 /// Why validation failed.

@@ -64,8 +64,10 @@ fn bad_first_configuration_names_run_and_field() {
     let ds = dataset("008_validation.csv", shaking_run(10, 0.9), 0.064);
     let err = validate_dataset(&Params::default(), &ds).expect_err("y0 beyond the rail");
     let msg = err.to_string();
+    // named by the run's column, not the model's `state.q[1]` (issue 22)
     assert!(
-        msg.contains("008_validation.csv") && msg.contains("state.q[1]"),
+        msg.contains("008_validation.csv") && msg.contains("the run's first `y`"),
         "{msg}"
     );
+    assert!(!msg.contains("state.q"), "{msg}");
 }

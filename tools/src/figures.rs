@@ -24,13 +24,13 @@ fn range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
-/// Writes both figures into `dir` (atomically, under the policy `outputs`); returns their
+/// Writes both figures into `dir` (staged in `outputs`, published by its commit); returns their
 /// paths.
 pub fn write(
     dir: &Path,
     case1: &CaseData,
     case2: &CaseData,
-    outputs: &Outputs,
+    outputs: &mut Outputs,
 ) -> Result<Vec<PathBuf>> {
     let p1 = dir.join("case1_trolley_velocity.svg");
     let mut svg = String::new();
@@ -38,14 +38,14 @@ pub fn write(
         path: p1.clone(),
         message: e.to_string(),
     })?;
-    outputs.write(&p1, svg)?;
+    outputs.stage(&p1, svg)?;
     let p2 = dir.join("case2_rope.svg");
     let mut svg = String::new();
     case2_fig(&mut svg, case2).map_err(|e| Error::Plot {
         path: p2.clone(),
         message: e.to_string(),
     })?;
-    outputs.write(&p2, svg)?;
+    outputs.stage(&p2, svg)?;
     Ok(vec![p1, p2])
 }
 

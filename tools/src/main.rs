@@ -29,7 +29,10 @@ fn within(lo: f64, hi: f64) -> impl Fn(&str) -> Result<f64> + Clone + Send + Syn
             .parse()
             .map_err(|e| anyhow::anyhow!("`{s}` is not a number ({e})"))?;
         if !(v.is_finite() && v > lo && v <= hi) {
-            anyhow::bail!("{v} is outside the plausible range ({lo}, {hi}]");
+            anyhow::bail!(
+                "{} is outside the plausible range ({lo}, {hi}]",
+                crane_ident::num::Num(v)
+            );
         }
         Ok(v)
     }
@@ -44,7 +47,10 @@ fn period_s(s: &str) -> Result<f64> {
         .parse()
         .map_err(|e| anyhow::anyhow!("`{s}` is not a number ({e})"))?;
     if !(v >= lo && v <= hi) {
-        anyhow::bail!("{v} s is outside the plausible range [{lo:e}, {hi}] s");
+        anyhow::bail!(
+            "{} s is outside the plausible range [{lo:e}, {hi}] s",
+            crane_ident::num::Num(v)
+        );
     }
     Ok(v)
 }
@@ -205,8 +211,9 @@ enum Command {
     /// Find what the simulation gets wrong on measured data, name the cause, extend the model
     /// and measure the gain on held-out data.
     Diagnose {
-        /// Data set directory (crane or single-axis runs).
-        dataset: PathBuf,
+        /// Data set directory (crane or single-axis runs); required (`crane diagnose --json
+        /// DIR` with no other folder takes DIR as the data set, the report on stdout).
+        dataset: Option<PathBuf>,
         /// Baseline parameter file (crane data); default: the built-in parameters.
         #[arg(long)]
         params: Option<PathBuf>,
@@ -252,6 +259,34 @@ enum Command {
               value_parser = period_s)]
         period_s: f64,
     },
+}
+
+/// The data set of `crane diagnose` and its `--json`: `crane diagnose --json DIR` without a
+/// data set took DIR as the report file and then found no data set; a folder there is the
+/// data set, with the report on stdout. Without any data set: the usage error (exit 2).
+fn diagnose_dataset(
+    dataset: Option<PathBuf>,
+    json: Option<Option<PathBuf>>,
+) -> (PathBuf, Option<Option<PathBuf>>) {
+    match (dataset, json) {
+        (Some(d), j) => (d, j),
+        (None, Some(Some(dir))) if dir.is_dir() => (dir, Some(None)),
+        (None, _) => {
+            use clap::CommandFactory;
+            let root = Cli::command();
+            let mut usage = root
+                .find_subcommand("diagnose")
+                .cloned()
+                .unwrap_or_else(|| root.clone())
+                .bin_name("crane diagnose");
+            usage
+                .error(
+                    clap::error::ErrorKind::MissingRequiredArgument,
+                    "the data set folder was not given: crane diagnose DATASET [OPTIONS]",
+                )
+                .exit()
+        }
+    }
 }
 
 /// `crane monitor`: decodes the log, writes the report and the plot, prints the table (or
@@ -371,6 +406,7 @@ fn run(command: Command) -> Result<()> {
             force,
             json,
         } => {
+            let (dataset, json) = diagnose_dataset(dataset, json);
             // `--json FILE` is `--report FILE`; a bare `--json` prints the report on stdout
             let (json, report) = match json {
                 Some(Some(file)) if report.is_none() => (false, Some(file)),
@@ -402,14 +438,48 @@ fn run(command: Command) -> Result<()> {
     Ok(())
 }
 
+/// `e` and its causes as one line, each cause once: a cause whose text an outer message
+/// already holds (a library error that prints its source, then the source itself) is not
+/// repeated.
+fn message(e: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if text.is_empty() || line.contains(&text) {
+            continue;
+        }
+        if !line.is_empty() {
+            line.push_str(": ");
+        }
+        line.push_str(&text);
+    }
+    line
+}
+
+/// Held by whoever ends the process: the interrupt handler while it removes the
+/// temporaries, `main` before it reports an error or returns. So the main thread, whose
+/// outputs vanish under it, cannot end the process (or print an error about them) in the
+/// middle of the handler's clean-up.
+static EXIT: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 fn main() {
+    // Ctrl-C, SIGTERM, SIGHUP: the temporary files and scratch folders of unfinished outputs
+    // go before the exit, so an interrupted command leaves its outputs as they were (if no
+    // handler can be set, a signal ends the process as before)
+    let _ = ctrlc::set_handler(|| {
+        let _end = EXIT.lock();
+        crane_ident::atomic::remove_pending();
+        std::process::exit(130);
+    });
     let cli = Cli::parse();
-    if let Err(e) = run(cli.command) {
+    let result = run(cli.command);
+    let _end = EXIT.lock();
+    if let Err(e) = result {
         if broken_pipe(&e) {
             // `crane ... | head`: the reader has what it wanted
             std::process::exit(0);
         }
-        eprintln!("crane: error: {e:#}");
+        eprintln!("crane: error: {}", message(&e));
         std::process::exit(1);
     }
 }

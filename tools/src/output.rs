@@ -1,8 +1,13 @@
-//! Where the command line writes. Every output goes through [`Outputs`]: it is written
-//! atomically (temporary file in the same directory, then rename: [`crane_ident::atomic`]),
-//! and it never replaces an input of the command or a file of an existing data set (a
-//! directory holding `dataset.toml`) unless the user passed `--force`.
+//! Where the command line writes. Every output of a command goes through its [`Outputs`]:
+//! - it never replaces an input of the command or a file of an existing data set (a
+//!   directory holding `dataset.toml`) unless the user passed `--force`, and never anything
+//!   but a regular file, a device, a FIFO or a missing path ([`crane_ident::atomic`]);
+//! - it is checked and staged beside its target when the command produces it
+//!   ([`Outputs::stage`]), and all the outputs of the command are published together by
+//!   [`Outputs::commit`] at its end ([`crane_ident::atomic::Transaction`]): a command that
+//!   fails, on any output or in its work, leaves every earlier output as it was.
 
+use crane_ident::atomic::{AtomicFile, Transaction};
 use crane_ident::data::DATASET_FILE;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -31,6 +36,12 @@ pub enum OutputError {
         out: PathBuf,
         /// What collides.
         why: &'static str,
+    },
+    /// Publishing the staged outputs failed; every target holds what it held before.
+    #[error("{cause} (so no output of this command was written: each is as it was)")]
+    Commit {
+        /// Why (names the output).
+        cause: std::io::Error,
     },
     /// Creating a directory or writing failed.
     #[error("write {path}")]
@@ -67,11 +78,14 @@ pub fn is_dataset(dir: &Path) -> bool {
     dir.join(DATASET_FILE).is_file()
 }
 
-/// The output policy of one command: its inputs, and whether `--force` was given.
-#[derive(Clone, Debug, Default)]
+/// The outputs of one command: its policy (its inputs, and whether `--force` was given) and
+/// the outputs staged so far, published together by [`Outputs::commit`] (module
+/// documentation). Dropped uncommitted, it removes what it staged and changes nothing.
+#[derive(Debug, Default)]
 pub struct Outputs {
     inputs: Vec<PathBuf>,
     force: bool,
+    staged: Transaction,
 }
 
 impl Outputs {
@@ -80,6 +94,7 @@ impl Outputs {
         Outputs {
             inputs: Vec::new(),
             force,
+            staged: Transaction::new(),
         }
     }
 
@@ -150,28 +165,98 @@ impl Outputs {
         Ok(())
     }
 
-    /// Checks `out` ([`Outputs::check`]), creates its directory and writes `bytes`
-    /// atomically.
-    pub fn write(&self, out: &Path, bytes: impl AsRef<[u8]>) -> Result<(), OutputError> {
+    /// Checks `out` ([`Outputs::check`]), creates its folder and stages `bytes` for it: the
+    /// file appears at [`Outputs::commit`], with every other output of the command.
+    pub fn stage(&mut self, out: &Path, bytes: impl AsRef<[u8]>) -> Result<(), OutputError> {
         self.check(out)?;
-        create_parent(out)?;
-        crane_ident::atomic::write(out, bytes).map_err(|source| OutputError::Io {
+        self.create_parent(out)?;
+        self.staged
+            .write(out, bytes)
+            .map_err(|source| OutputError::Io {
+                path: out.to_path_buf(),
+                source,
+            })
+    }
+
+    /// Checks `out` and creates its folder; returns a file to write in pieces, to be handed
+    /// back with [`Outputs::stage_file`].
+    pub fn create(&mut self, out: &Path) -> Result<AtomicFile, OutputError> {
+        self.check(out)?;
+        self.create_parent(out)?;
+        AtomicFile::create(out).map_err(|source| OutputError::Io {
             path: out.to_path_buf(),
             source,
         })
     }
-}
 
-/// Creates the directory `out` will be written in.
-pub fn create_parent(out: &Path) -> Result<(), OutputError> {
-    match out.parent() {
-        Some(dir) if !dir.as_os_str().is_empty() => {
-            crane_ident::atomic::create_dir(dir).map_err(|source| OutputError::Io {
-                path: dir.to_path_buf(),
+    /// Stages a file made by [`Outputs::create`] and written.
+    pub fn stage_file(&mut self, file: AtomicFile) -> Result<(), OutputError> {
+        let path = file.path().to_path_buf();
+        self.staged
+            .add(file)
+            .map_err(|source| OutputError::Io { path, source })
+    }
+
+    /// Stages the folder `out` whole ([`Transaction::dir`]): returns the scratch folder to
+    /// fill, which replaces `out` at the commit. Only a folder or a missing path is replaced;
+    /// whether an existing data set there may be is the caller's rule (the virtual rig's).
+    pub fn stage_dir(&mut self, out: &Path) -> Result<PathBuf, OutputError> {
+        self.create_parent(out)?;
+        self.staged.dir(out).map_err(|source| OutputError::Io {
+            path: out.to_path_buf(),
+            source,
+        })
+    }
+
+    /// A scratch folder in the output folder `dir` (created, checked with
+    /// [`Outputs::check_dir`]) for a library that writes its files itself; stage each file
+    /// it wrote with [`Outputs::adopt`].
+    pub fn scratch_in(&mut self, dir: &Path) -> Result<PathBuf, OutputError> {
+        self.check_dir(dir)?;
+        let io = |source| OutputError::Io {
+            path: dir.to_path_buf(),
+            source,
+        };
+        self.staged.create_dir(dir).map_err(io)?;
+        self.staged.scratch_in(dir).map_err(io)
+    }
+
+    /// Stages the file `written` (in a [`Outputs::scratch_in`] folder) for `out`, after
+    /// checking `out`.
+    pub fn adopt(&mut self, out: &Path, written: &Path) -> Result<(), OutputError> {
+        self.check(out)?;
+        self.staged
+            .adopt(out, written)
+            .map_err(|source| OutputError::Io {
+                path: out.to_path_buf(),
                 source,
             })
+    }
+
+    /// Creates the folder `out` will be written in (removed again, when empty, if the
+    /// command fails).
+    fn create_parent(&mut self, out: &Path) -> Result<(), OutputError> {
+        match out.parent() {
+            Some(dir) if !dir.as_os_str().is_empty() => {
+                self.staged
+                    .create_dir(dir)
+                    .map_err(|source| OutputError::Io {
+                        path: dir.to_path_buf(),
+                        source,
+                    })
+            }
+            _ => Ok(()),
         }
-        _ => Ok(()),
+    }
+
+    /// Publishes every staged output together, or none ([`Transaction::commit`]); returns
+    /// their paths in staging order.
+    pub fn commit(self) -> Result<Vec<PathBuf>, OutputError> {
+        let written: Vec<PathBuf> = self.staged.targets().map(Path::to_path_buf).collect();
+        self.staged
+            .commit()
+            .map_err(|cause| OutputError::Commit { cause })?;
+        Ok(written)
     }
 }
 
@@ -221,10 +306,38 @@ mod tests {
     fn writes_atomically_creating_the_directory() {
         let d = tmp("write");
         let p = d.join("a/b/c.txt");
-        Outputs::new(false).write(&p, "one").unwrap();
-        Outputs::new(false).write(&p, "two").unwrap();
+        for text in ["one", "two"] {
+            let mut o = Outputs::new(false);
+            o.stage(&p, text).unwrap();
+            assert_eq!(o.commit().unwrap(), vec![p.clone()]);
+        }
         assert_eq!(std::fs::read_to_string(&p).unwrap(), "two");
         assert_eq!(std::fs::read_dir(d.join("a/b")).unwrap().count(), 1);
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    /// Issue 22: a command that fails leaves every earlier output as it was, and the folders
+    /// it created for its outputs are gone again.
+    #[test]
+    fn a_failed_command_changes_nothing() {
+        let d = tmp("failed");
+        let params = d.join("params.toml");
+        std::fs::write(&params, "old").unwrap();
+        {
+            let mut o = Outputs::new(false);
+            o.stage(&params, "new").unwrap();
+            o.stage(&d.join("plots/x.svg"), "<svg/>").unwrap();
+            // a later output is refused: the command ends with an error, uncommitted
+            std::fs::create_dir_all(d.join("dir.svg")).unwrap();
+            assert!(o.stage(&d.join("dir.svg"), "<svg/>").is_err());
+        }
+        assert_eq!(std::fs::read_to_string(&params).unwrap(), "old");
+        let left: Vec<_> = std::fs::read_dir(&d)
+            .unwrap()
+            .flatten()
+            .map(|e| e.file_name())
+            .collect();
+        assert_eq!(left.len(), 2, "{left:?}");
         std::fs::remove_dir_all(&d).unwrap();
     }
 }

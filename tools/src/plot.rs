@@ -27,7 +27,7 @@ pub fn validation(
     ds: &Dataset,
     report: &ValidationReport,
     dir: &Path,
-    outputs: &Outputs,
+    outputs: &mut Outputs,
 ) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
     for rv in &report.runs {
@@ -54,7 +54,7 @@ pub fn validation(
         draw(&mut svg, &run.t, &meas, &sim, &rv.nmae_pct)
             .map_err(|e| anyhow::anyhow!("{e}"))
             .with_context(|| format!("plot {}", path.display()))?;
-        outputs.write(&path, svg)?;
+        outputs.stage(&path, svg)?;
         files.push(path);
     }
     Ok(files)
@@ -139,11 +139,6 @@ fn padded(vals: impl Iterator<Item = f64>, min_pad: f64) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
-/// `sum c_k p^k`, clamped at zero like the model's `Cbar(p)`.
-fn horner(c: &[f64], p: f64) -> f64 {
-    c.iter().rev().fold(0.0, |a, ci| a * p + ci).max(0.0)
-}
-
 /// One SVG per drive axis (`friction_x.svg`, `friction_y.svg`), a panel per direction: the
 /// identified dry-friction curve `Cbar(p)` [N] over the position [m], its simultaneous 95 %
 /// band (shaded), its pointwise 95 % band (thin lines), the breakaway probes, and the true
@@ -152,7 +147,7 @@ pub fn friction(
     id: &Identified,
     truth: Option<&crane_model::Params>,
     dir: &Path,
-    outputs: &Outputs,
+    outputs: &mut Outputs,
 ) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
     for (name, d, t) in [
@@ -165,7 +160,7 @@ pub fn friction(
         draw_friction(&mut svg, name, [&d.dry_pos, &d.dry_neg], truths)
             .map_err(|e| anyhow::anyhow!("{e}"))
             .with_context(|| format!("plot {}", path.display()))?;
-        outputs.write(&path, svg)?;
+        outputs.stage(&path, svg)?;
         files.push(path);
     }
     Ok(files)
@@ -186,7 +181,12 @@ fn draw_friction(
         let colour = [BLUE, RED][i];
         let truth_c = truth.map(|t| t[i]);
         let truth_pts: Vec<(f64, f64)> = truth_c
-            .map(|tc| c.position.iter().map(|&p| (p, horner(&tc, p))).collect())
+            .map(|tc| {
+                c.position
+                    .iter()
+                    .map(|&p| (p, crane_model::friction::dry(&tc, p)))
+                    .collect()
+            })
             .unwrap_or_default();
         let (lo, hi) = padded(
             c.simultaneous_lower
@@ -340,12 +340,12 @@ fn mode_runs(rec: &SimulationRecord, i: usize) -> Vec<(f64, f64, Mode)> {
 /// The run of `crane simulate` as one SVG: drive positions, velocities and voltages of X, Y
 /// and the rope against time, and a panel of mode bands (Negative / Stopped / Positive per
 /// drive).
-pub fn simulation(rec: &SimulationRecord, path: &Path, outputs: &Outputs) -> Result<()> {
+pub fn simulation(rec: &SimulationRecord, path: &Path, outputs: &mut Outputs) -> Result<()> {
     let mut svg = String::new();
     draw_simulation(rec, &mut svg)
         .map_err(|e| anyhow::anyhow!("{e}"))
         .with_context(|| format!("plot {}", path.display()))?;
-    outputs.write(path, svg)?;
+    outputs.stage(path, svg)?;
     Ok(())
 }
 

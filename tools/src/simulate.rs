@@ -31,10 +31,10 @@
 //! it); it loads back with `crane_ident::data`.
 
 use anyhow::{bail, Context, Result};
-use crane_ident::atomic::AtomicFile;
+use crane_ident::num::Num;
 use crane_ident::params_file;
 use crane_model::{Config, Crane, FrictionLaw, Mode, Params, State};
-use crane_tools::output::{create_parent, OutputError, Outputs};
+use crane_tools::output::{OutputError, Outputs};
 use serde::{Deserialize, Serialize};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -153,34 +153,39 @@ pub struct SimulateSummary {
     pub samples: usize,
 }
 
-/// Checks the scenario's numbers against their plausible ranges, before any work.
-fn check_ranges(sc: &Scenario) -> Result<()> {
+/// Checks the scenario's numbers against their plausible ranges, before any work; errors
+/// name the scenario (`label`: its file) and the key.
+fn check_ranges(sc: &Scenario, label: &str) -> Result<()> {
     let d = sc.duration_s;
     if !(d.is_finite() && d > 0.0 && d <= MAX_DURATION_S) {
-        bail!("scenario: duration_s = {d} is outside the plausible range (0, {MAX_DURATION_S}] s");
+        bail!(
+            "{label}: duration_s = {} is outside the plausible range (0, {MAX_DURATION_S}] s",
+            Num(d)
+        );
     }
     let (lo, hi) = H_RANGE;
     if !(sc.h.is_finite() && sc.h >= lo && sc.h <= hi) {
         bail!(
-            "scenario: h = {} is outside the plausible range [{lo:e}, {hi}] s",
-            sc.h
+            "{label}: h = {} is outside the plausible range [{lo:e}, {hi}] s",
+            Num(sc.h)
         );
     }
     if !(sc.sample_s.is_finite() && sc.sample_s > 0.0) {
-        bail!("scenario: sample_s = {} must be > 0", sc.sample_s);
+        bail!("{label}: sample_s = {} must be > 0", Num(sc.sample_s));
     }
     let steps = d / sc.h;
     if steps > MAX_STEPS {
-        bail!("scenario: duration_s / h = {steps:.3e} steps; at most {MAX_STEPS:e} (shorten duration_s or raise h)");
+        bail!("{label}: duration_s / h = {steps:.3e} steps; at most {MAX_STEPS:e} (shorten duration_s or raise h)");
     }
     let samples = d / sc.sample_s;
     if samples > MAX_SAMPLES {
-        bail!("scenario: duration_s / sample_s = {samples:.3e} CSV rows; at most {MAX_SAMPLES:e} (shorten duration_s or raise sample_s)");
+        bail!("{label}: duration_s / sample_s = {samples:.3e} CSV rows; at most {MAX_SAMPLES:e} (shorten duration_s or raise sample_s)");
     }
     for (i, v) in sc.qd0.iter().enumerate() {
         if !(v.is_finite() && v.abs() <= MAX_RATE) {
             bail!(
-                "scenario: qd0[{i}] = {v} is outside the plausible range [-{MAX_RATE}, {MAX_RATE}]"
+                "{label}: qd0[{i}] = {} is outside the plausible range [-{MAX_RATE}, {MAX_RATE}]",
+                Num(*v)
             );
         }
     }
@@ -191,17 +196,99 @@ fn check_ranges(sc: &Scenario) -> Result<()> {
             ("frequency_hz", t.frequency_hz, MAX_FREQUENCY_HZ),
         ] {
             if !(v.is_finite() && v.abs() <= max) {
-                bail!("scenario: input[{k}].{name} = {v} is outside the plausible range [-{max}, {max}]");
+                bail!(
+                    "{label}: input[{k}].{name} = {} is outside the plausible range [-{max}, {max}]",
+                    Num(v)
+                );
             }
         }
     }
     if let Some(m) = sc.payload_kg {
         let (lo, hi) = PAYLOAD_RANGE_KG;
         if !(m.is_finite() && m >= lo && m <= hi) {
-            bail!("scenario: payload_kg = {m} is outside the plausible range [{lo:e}, {hi}] kg");
+            bail!(
+                "{label}: payload_kg = {} is outside the plausible range [{lo:e}, {hi}] kg",
+                Num(m)
+            );
         }
     }
     Ok(())
+}
+
+/// The model failed on a step of the scenario.
+#[derive(Debug)]
+struct StepFailed {
+    /// Time of the step [s].
+    t: f64,
+    /// The model's message.
+    error: String,
+}
+
+impl std::fmt::Display for StepFailed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "at t = {} s: {}", Num(self.t), self.error)
+    }
+}
+
+impl std::error::Error for StepFailed {}
+
+/// What the messages of a simulation call the scenario and its parameters.
+struct Names {
+    /// The scenario file, or "the built-in scenario".
+    scenario: String,
+    /// The parameter file, or "the built-in parameters".
+    params: String,
+}
+
+/// The model's refusal of the scenario's first state or of its parameters, said in the
+/// scenario's own keys (`q0[i]`, `qd0[i]`, `h`) or the parameter file's, with the file.
+fn setup_error(e: &crane_model::Error, names: &Names, p: &Params) -> anyhow::Error {
+    let axis = e
+        .field
+        .strip_prefix("state.q[")
+        .and_then(|r| r.strip_suffix(']'))
+        .and_then(|i| i.parse::<usize>().ok());
+    if let (Some(i), crane_model::Problem::OutOfLimits) = (axis, e.problem) {
+        if let Some((name, a)) = ["x", "y", "rope"].iter().zip(p.axes()).nth(i) {
+            return anyhow::anyhow!(
+                "{}: q0[{i}] = {} is outside the travel [{name}.min, {name}.max] = [{}, {}] of {}",
+                names.scenario,
+                Num(e.value),
+                Num(a.min),
+                Num(a.max),
+                names.params
+            );
+        }
+    }
+    let text = e.to_string();
+    if e.field.starts_with("state.") || e.field.starts_with("config.") {
+        let text = text
+            .replace("`state.qd[", "`qd0[")
+            .replace("`state.q[", "`q0[")
+            .replace("`config.h`", "`h`");
+        return anyhow::anyhow!("{}: {text}", names.scenario);
+    }
+    anyhow::anyhow!("{}: {text}", names.params)
+}
+
+/// A hint for a step the model rejected: the axis whose `h * viscous / inertia` is largest,
+/// when it is above 1 (the drive's own time constant shorter than the step: too stiff for
+/// `h`).
+fn stiffness_hint(p: &Params, h: f64) -> String {
+    let worst = ["x", "y", "rope"]
+        .iter()
+        .zip(p.axes())
+        .map(|(name, a)| (name, h * a.viscous_pos.max(a.viscous_neg) / a.inertia))
+        .filter(|(_, r)| r.is_finite())
+        .max_by(|a, b| a.1.total_cmp(&b.1));
+    match worst {
+        Some((name, r)) if r > 1.0 => format!(
+            " (too stiff for h: h * {name}.viscous / {name}.inertia = {}, above 1; lower h or \
+             check {name}.viscous_pos, {name}.viscous_neg and {name}.inertia)",
+            Num(r)
+        ),
+        _ => " (check the parameters, or lower h)".into(),
+    }
 }
 
 /// The plot written beside a CSV: same path with the extension `svg`.
@@ -210,8 +297,9 @@ pub fn plot_path(csv: &Path) -> PathBuf {
 }
 
 /// Runs a scenario file (or the default) and writes the CSV and its plot ([`plot_path`]),
-/// each atomically; neither may replace the scenario, its parameter file or a data set's file
-/// unless `force`.
+/// atomically and together at the end, or neither (a failed plot leaves the earlier CSV as
+/// it was); neither may replace the scenario, its parameter file or a data set's file unless
+/// `force`.
 pub fn simulate(
     scenario: Option<&Path>,
     out: &Path,
@@ -226,6 +314,10 @@ pub fn simulate(
         }
         .into());
     }
+    let label = scenario.map_or_else(
+        || "the built-in scenario".to_string(),
+        |p| p.display().to_string(),
+    );
     let (sc, base) = match scenario {
         Some(p) => {
             let text = crane_ident::input::read_text(p)
@@ -236,7 +328,7 @@ pub fn simulate(
         }
         None => (Scenario::default(), PathBuf::new()),
     };
-    check_ranges(&sc)?;
+    check_ranges(&sc, &label)?;
     let mut outputs = Outputs::new(force);
     if let Some(p) = scenario {
         outputs = outputs.input(p);
@@ -246,12 +338,17 @@ pub fn simulate(
     }
     outputs.check(out)?;
     outputs.check(&svg)?;
-    let mut params = match &sc.params {
+    let (mut params, params_label) = match &sc.params {
         Some(p) => {
             let path = base.join(p);
-            params_file::read(&path).context("scenario: params")?
+            let read = params_file::read(&path).with_context(|| format!("{label}: params"))?;
+            (read, path.display().to_string())
         }
-        None => Params::default(),
+        None => (Params::default(), "the built-in parameters".to_string()),
+    };
+    let names = Names {
+        scenario: label.clone(),
+        params: params_label,
     };
     if let Some(m) = sc.payload_kg {
         params.payload_mass = m;
@@ -260,7 +357,7 @@ pub fn simulate(
     for (k, t) in sc.input.iter().enumerate() {
         let Some(i) = axis_index(&t.axis) else {
             bail!(
-                "scenario: input[{k}].axis = {:?}: expected \"x\", \"y\" or \"l\"",
+                "{label}: input[{k}].axis = {:?}: expected \"x\", \"y\" or \"l\"",
                 t.axis
             );
         };
@@ -273,7 +370,7 @@ pub fn simulate(
             ("stop_s", t.stop_s),
         ] {
             if !v.is_finite() {
-                bail!("scenario: input[{k}].{name} is not finite");
+                bail!("{label}: input[{k}].{name} is not finite");
             }
         }
         terms.push((i, t.clone()));
@@ -281,9 +378,9 @@ pub fn simulate(
     let per = (sc.sample_s / sc.h).round();
     if !(per >= 1.0 && (per * sc.h - sc.sample_s).abs() <= 1e-9 * sc.sample_s.abs()) {
         bail!(
-            "scenario: sample_s ({}) must be a whole multiple of h ({})",
-            sc.sample_s,
-            sc.h
+            "{label}: sample_s ({}) must be a whole multiple of h ({})",
+            Num(sc.sample_s),
+            Num(sc.h)
         );
     }
     let per = per as usize;
@@ -299,21 +396,62 @@ pub fn simulate(
             qd: sc.qd0,
         },
     )
-    .map_err(|e| anyhow::anyhow!("scenario: {e}"))?;
-    create_parent(out)?;
-    let mut w = AtomicFile::create(out).with_context(|| format!("create {}", out.display()))?;
-    writeln!(w, "# crane simulate: hybrid model, h = {} s", sc.h)?;
+    .map_err(|e| setup_error(&e, &names, &params))?;
+    let mut w = outputs.create(out)?;
+    let (samples, rec) = record(&sc, &terms, per, &mut crane, &mut w, out).map_err(|e| {
+        match e.downcast::<StepFailed>() {
+            Ok(step) => anyhow::anyhow!(
+                "{}: the simulation with {} failed: {step}{}",
+                names.scenario,
+                names.params,
+                stiffness_hint(&params, sc.h)
+            ),
+            Err(e) => e,
+        }
+    })?;
+    outputs.stage_file(w)?;
+    crate::plot::simulation(&rec, &svg, &mut outputs)?;
+    // the CSV and its plot together, or neither
+    outputs.commit()?;
+    if !json {
+        out!(
+            "simulate: {samples} samples -> {}, plot {}",
+            out.display(),
+            svg.display()
+        );
+    }
+    Ok(SimulateSummary {
+        csv: out.to_path_buf(),
+        svg,
+        samples,
+    })
+}
+
+/// Steps the scenario's inputs through `crane` to `duration_s`, writing every `per`-th state
+/// to `w` (the CSV `out`, for messages) and recording it for the plot; returns the rows
+/// written and the record.
+fn record(
+    sc: &Scenario,
+    terms: &[(usize, Term)],
+    per: usize,
+    crane: &mut Crane,
+    w: &mut impl Write,
+    out: &Path,
+) -> Result<(usize, crate::plot::SimulationRecord)> {
+    let wrote = || format!("write {}", out.display());
+    writeln!(w, "# crane simulate: hybrid model, h = {} s", sc.h).with_context(wrote)?;
     writeln!(
         w,
         "t,u_x,u_y,u_l,x,y,l,alpha,beta,mode_x,mode_y,mode_l,friction_x,friction_y,friction_l,tension"
-    )?;
+    )
+    .with_context(wrote)?;
     let steps = (sc.duration_s / sc.h).round() as usize;
     let mut samples = 0;
     let mut rec = crate::plot::SimulationRecord::default();
     for k in 0..=steps {
         let t = k as f64 * sc.h;
         let mut u = [0.0; 3];
-        for (i, term) in &terms {
+        for (i, term) in terms {
             if t >= term.start_s && t < term.stop_s {
                 let arg = 2.0 * std::f64::consts::PI * term.frequency_hz * (t - term.start_s)
                     + term.phase_rad;
@@ -324,9 +462,10 @@ pub fn simulate(
         if k % per == 0 {
             let s = crane.state();
             let m = crane.modes().map(mode_code);
-            let o = crane
-                .output()
-                .map_err(|e| anyhow::anyhow!("t = {t} s: {e}"))?;
+            let o = crane.output().map_err(|e| StepFailed {
+                t,
+                error: e.to_string(),
+            })?;
             writeln!(
                 w,
                 "{t},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
@@ -345,7 +484,8 @@ pub fn simulate(
                 o.friction[1],
                 o.friction[2],
                 o.tension
-            )?;
+            )
+            .with_context(wrote)?;
             samples += 1;
             rec.t.push(t);
             rec.u.push(u);
@@ -354,24 +494,11 @@ pub fn simulate(
             rec.modes.push(crane.modes());
         }
         if k < steps {
-            crane
-                .step(u)
-                .map_err(|e| anyhow::anyhow!("scenario step at t = {t} s: {e}"))?;
+            crane.step(u).map_err(|e| StepFailed {
+                t,
+                error: e.to_string(),
+            })?;
         }
     }
-    w.commit()
-        .with_context(|| format!("write {}", out.display()))?;
-    crate::plot::simulation(&rec, &svg, &outputs)?;
-    if !json {
-        out!(
-            "simulate: {samples} samples -> {}, plot {}",
-            out.display(),
-            svg.display()
-        );
-    }
-    Ok(SimulateSummary {
-        csv: out.to_path_buf(),
-        svg,
-        samples,
-    })
+    Ok((samples, rec))
 }

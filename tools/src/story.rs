@@ -7,7 +7,7 @@ use crane_ident::campaign::{run_rig, RigOptions, RigSummary};
 use crane_ident::identify::{Estimate, Identified};
 use crane_ident::params_file;
 use crane_ident::validate::ValidationReport;
-use crane_tools::output::{create_parent, is_dataset, normalise, OutputError, Outputs};
+use crane_tools::output::{is_dataset, normalise, OutputError, Outputs};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -25,57 +25,6 @@ fn spinner(msg: &str) -> ProgressBar {
     pb
 }
 
-/// A scratch folder removed when dropped (an error, a panic unwinding) and on Ctrl-C, unless
-/// [`Scratch::disarm`]ed after it was renamed into place.
-struct Scratch {
-    path: PathBuf,
-    armed: bool,
-}
-
-/// Scratch folders to remove if the process is interrupted (SIGINT, SIGTERM).
-static SCRATCH: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
-
-impl Scratch {
-    fn new(path: PathBuf) -> Scratch {
-        static HANDLER: std::sync::Once = std::sync::Once::new();
-        HANDLER.call_once(|| {
-            // (if a handler cannot be set, Ctrl-C just ends the process as before)
-            let _ = ctrlc::set_handler(|| {
-                if let Ok(list) = SCRATCH.lock() {
-                    for p in list.iter() {
-                        let _ = std::fs::remove_dir_all(p);
-                    }
-                }
-                std::process::exit(130);
-            });
-        });
-        if let Ok(mut list) = SCRATCH.lock() {
-            list.push(path.clone());
-        }
-        Scratch { path, armed: true }
-    }
-
-    fn path(&self) -> &Path {
-        &self.path
-    }
-
-    /// Keeps the folder (it is the output now).
-    fn disarm(mut self) {
-        self.armed = false;
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        if let Ok(mut list) = SCRATCH.lock() {
-            list.retain(|p| p != &self.path);
-        }
-        if self.armed {
-            let _ = std::fs::remove_dir_all(&self.path);
-        }
-    }
-}
-
 /// When the virtual rig may replace an existing, non-empty output folder.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Replace {
@@ -88,10 +37,10 @@ enum Replace {
     Always,
 }
 
-/// Runs the virtual rig into `out` atomically: the data set is written into a temporary
-/// directory beside `out` and renamed into place, so `out` holds the old data set or the new
-/// one, never a mix. An existing, non-empty `out` is replaced as `replace` says.
-fn rig_into(out: &Path, opts: &RigOptions, replace: Replace) -> Result<RigSummary> {
+/// Refuses a rig output folder `out` before any work: a path that is not a folder, an
+/// existing non-empty folder unless `replace` allows it, or the current directory (or one
+/// holding it), which cannot be replaced by a rename.
+fn check_rig_out(out: &Path, replace: Replace) -> Result<()> {
     if out.exists() {
         if !out.is_dir() {
             bail!("{} exists and is not a directory", out.display());
@@ -126,17 +75,29 @@ fn rig_into(out: &Path, opts: &RigOptions, replace: Replace) -> Result<RigSummar
             );
         }
     }
-    create_parent(out)?;
-    // removed on every way out but the last rename, Ctrl-C included
-    let tmp = Scratch::new(crane_ident::atomic::temp_beside(out));
-    let mut summary =
-        run_rig(tmp.path(), opts).with_context(|| format!("rig into {}", out.display()))?;
+    Ok(())
+}
+
+/// Runs the virtual rig into a scratch folder staged in `outputs` to replace `out` whole at
+/// the commit (`out` then holds the old data set or the new one, never a mix; a failure or
+/// Ctrl-C before the commit leaves it as it was and removes the scratch folder). An existing,
+/// non-empty `out` is replaced as `replace` says. Returns the campaign's summary (its `dir`
+/// is `out`) and the scratch folder, where the new data set can be read before the commit.
+fn rig_stage(
+    out: &Path,
+    opts: &RigOptions,
+    replace: Replace,
+    outputs: &mut Outputs,
+) -> Result<(RigSummary, PathBuf)> {
+    check_rig_out(out, replace)?;
+    let tmp = outputs.stage_dir(out)?;
+    let mut summary = run_rig(&tmp, opts).with_context(|| format!("rig into {}", out.display()))?;
     if replace == Replace::OnlyOurs && out.is_dir() {
         let foreign = std::fs::read_dir(out)
             .with_context(|| format!("read {}", out.display()))?
             .flatten()
             .map(|e| e.file_name())
-            .find(|name| !tmp.path().join(name).exists());
+            .find(|name| !tmp.join(name).exists());
         if let Some(name) = foreign {
             bail!(
                 "{} holds {}, which the demo did not write; refusing to replace the folder \
@@ -146,21 +107,8 @@ fn rig_into(out: &Path, opts: &RigOptions, replace: Replace) -> Result<RigSummar
             );
         }
     }
-    let old = Scratch::new(crane_ident::atomic::temp_beside(out));
-    let had_old = out.exists();
-    if had_old {
-        std::fs::rename(out, old.path())
-            .with_context(|| format!("move {} aside", out.display()))?;
-    }
-    if let Err(e) = std::fs::rename(tmp.path(), out) {
-        if had_old {
-            let _ = std::fs::rename(old.path(), out);
-        }
-        return Err(e).with_context(|| format!("rename the new data set to {}", out.display()));
-    }
-    tmp.disarm();
     summary.dir = out.to_path_buf();
-    Ok(summary)
+    Ok((summary, tmp))
 }
 
 /// `crane rig`: the virtual rig's campaign into `out` (refused over an existing, non-empty
@@ -171,38 +119,41 @@ pub fn rig(out: &Path, seed: Option<u64>, force: bool, json: bool) -> Result<Rig
     } else {
         Replace::Never
     };
-    rig_with(out, seed, replace, json)
-}
-
-/// `crane rig` with a replacement policy (see [`Replace`]).
-fn rig_with(out: &Path, seed: Option<u64>, replace: Replace, json: bool) -> Result<RigSummary> {
     let mut opts = RigOptions::default();
     if let Some(s) = seed {
         opts.plant.seed = s;
     }
+    let mut outputs = Outputs::new(force);
     let pb = spinner("virtual rig: running the paper's experiments");
-    let summary = rig_into(out, &opts, replace)?;
+    let (summary, _) = rig_stage(out, &opts, replace, &mut outputs)?;
+    outputs.commit()?;
     pb.finish_and_clear();
     if !json {
-        out!(
-            "rig: {} runs, {} samples in {} ({:.1} s)",
-            summary.runs,
-            summary.samples,
-            summary.dir.display(),
-            summary.seconds
-        );
-        for p in &summary.probes {
-            out!(
-                "  breakaway probes {}{}: {} (max predictive std {:.3} N, stop: {:?})",
-                p.axis,
-                p.direction,
-                p.positions.len(),
-                p.max_std,
-                p.stop
-            );
-        }
+        print_rig(&summary)?;
     }
     Ok(summary)
+}
+
+/// The rig's lines of `crane rig` and `crane demo`.
+fn print_rig(summary: &RigSummary) -> Result<()> {
+    out!(
+        "rig: {} runs, {} samples in {} ({:.1} s)",
+        summary.runs,
+        summary.samples,
+        summary.dir.display(),
+        summary.seconds
+    );
+    for p in &summary.probes {
+        out!(
+            "  breakaway probes {}{}: {} (max predictive std {:.3} N, stop: {:?})",
+            p.axis,
+            p.direction,
+            p.positions.len(),
+            p.max_std,
+            p.stop
+        );
+    }
+    Ok(())
 }
 
 fn est(e: &Estimate) -> String {
@@ -229,7 +180,8 @@ fn rig_truth(dataset: &Path) -> Result<Option<crane_model::Params>> {
 }
 
 /// `crane identify`: every parameter from a data set, written to `out` (TOML); friction
-/// plots with their bands into `plots` (SVG).
+/// plots with their bands into `plots` (SVG). The parameter file and the plots are
+/// published together at the end, or none of them.
 pub fn identify(
     dataset: &Path,
     out: &Path,
@@ -237,23 +189,41 @@ pub fn identify(
     force: bool,
     json: bool,
 ) -> Result<Identified> {
-    let outputs = Outputs::new(force)
+    let mut outputs = Outputs::new(force)
         .input(&dataset.join(crane_ident::data::DATASET_FILE))
         .input(&dataset.join(TRUTH_FILE));
     // refuse before the work, not after it
     outputs.check(out)?;
     outputs.check_dir(plots)?;
-    let pb = spinner("identifying");
-    let id = crane_ident::identify::identify(dataset)
-        .with_context(|| format!("identify from {}", dataset.display()))?;
-    pb.finish_and_clear();
-    let truth = rig_truth(dataset)?;
-    // the plots first: a failure there leaves the earlier parameter file as it was
-    let files = crate::plot::friction(&id, truth.as_ref(), plots, &outputs)?;
-    outputs.write(out, params_file::to_toml(&id.params))?;
-    if json {
-        return Ok(id);
+    let (id, files) = identify_stage(dataset, dataset, out, plots, &mut outputs)?;
+    outputs.commit()?;
+    if !json {
+        print_identified(&id, out, &files)?;
     }
+    Ok(id)
+}
+
+/// Identifies from the data set in `read` (named `shown` in messages) and stages the
+/// parameter file `out` and the friction plots in `plots` in `outputs`.
+fn identify_stage(
+    read: &Path,
+    shown: &Path,
+    out: &Path,
+    plots: &Path,
+    outputs: &mut Outputs,
+) -> Result<(Identified, Vec<PathBuf>)> {
+    let pb = spinner("identifying");
+    let id = crane_ident::identify::identify(read)
+        .with_context(|| format!("identify from {}", shown.display()))?;
+    pb.finish_and_clear();
+    let truth = rig_truth(read)?;
+    let files = crate::plot::friction(&id, truth.as_ref(), plots, outputs)?;
+    outputs.stage(out, params_file::to_toml(&id.params))?;
+    Ok((id, files))
+}
+
+/// The table of `crane identify` (and of `crane demo`).
+fn print_identified(id: &Identified, out: &Path, files: &[PathBuf]) -> Result<()> {
     out!("identified parameters -> {}", out.display());
     out!("| parameter | estimate ± std. error |\n|---|---|");
     let r = &id.rope;
@@ -297,10 +267,11 @@ pub fn identify(
     for f in files {
         out!("plot: {}", f.display());
     }
-    Ok(id)
+    Ok(())
 }
 
-/// `crane validate`: NMAE table of the validation runs and plots.
+/// `crane validate`: NMAE table of the validation runs and plots (published together at
+/// the end, or none).
 pub fn validate(
     dataset: &Path,
     params: &Path,
@@ -308,26 +279,49 @@ pub fn validate(
     force: bool,
     json: bool,
 ) -> Result<ValidationReport> {
-    let outputs = Outputs::new(force).input(params);
+    let mut outputs = Outputs::new(force).input(params);
     outputs.check_dir(plots)?;
     let p = params_file::read(params).context("read parameters")?;
-    let ds = crane_ident::data::load_dataset(dataset)
-        .with_context(|| format!("load data set {}", dataset.display()))?;
-    let report = crane_ident::validate::validate_dataset(&p, &ds)
-        .with_context(|| format!("validate on {}", dataset.display()))?;
-    let files = crate::plot::validation(&ds, &report, plots, &outputs)?;
+    let what = format!("the parameters of {}", params.display());
+    let (report, files) = validate_stage(dataset, dataset, (&p, &what), plots, &mut outputs)?;
+    outputs.commit()?;
     if !json {
-        out!("validation (payload position NMAE, normalised by each axis's range):");
-        out!("{}", report.table().trim_end());
-        for f in files {
-            out!("plot: {}", f.display());
-        }
+        print_validation(&report, &files)?;
     }
     Ok(report)
 }
 
+/// Validates the parameters `p` (named `what` in messages: their file) on the data set in
+/// `read` (named `shown`) and stages the plots in `plots` in `outputs`.
+fn validate_stage(
+    read: &Path,
+    shown: &Path,
+    (p, what): (&crane_model::Params, &str),
+    plots: &Path,
+    outputs: &mut Outputs,
+) -> Result<(ValidationReport, Vec<PathBuf>)> {
+    let ds = crane_ident::data::load_dataset(read)
+        .with_context(|| format!("load data set {}", shown.display()))?;
+    let report = crane_ident::validate::validate_dataset(p, &ds)
+        .with_context(|| format!("validate {what} on {}", shown.display()))?;
+    let files = crate::plot::validation(&ds, &report, plots, outputs)?;
+    Ok((report, files))
+}
+
+/// The table of `crane validate` (and of `crane demo`).
+fn print_validation(report: &ValidationReport, files: &[PathBuf]) -> Result<()> {
+    out!("validation (payload position NMAE, normalised by each axis's range):");
+    out!("{}", report.table().trim_end());
+    for f in files {
+        out!("plot: {}", f.display());
+    }
+    Ok(())
+}
+
 /// `crane diagnose`: the text summary, or with `json` the report (JSON) on stdout; the
-/// report also into `report_file` if given.
+/// report also into `report_file` if given. The report file and the plots are published
+/// together at the end, or none of them: the plots are drawn into a scratch folder inside
+/// `plots` and staged from there.
 #[allow(clippy::too_many_arguments)]
 pub fn diagnose(
     dataset: &Path,
@@ -345,6 +339,10 @@ pub fn diagnose(
     }
     if let Some(r) = report_file {
         outputs.check(r)?;
+    }
+    if let Some(dir) = &plots {
+        // a plots "folder" that is a file: said before the work, not after it
+        outputs.check_dir(dir)?;
     }
     if let Some(user) = plots
         .as_deref()
@@ -367,23 +365,54 @@ pub fn diagnose(
         (false, Some(f)) => Baseline::Params(f),
         (false, None) => Baseline::Auto,
     };
+    let scratch = match &plots {
+        Some(dir) => Some(outputs.scratch_in(dir)?),
+        None => None,
+    };
     let opts = DiagnoseOptions {
         baseline,
-        plots_dir: plots,
+        plots_dir: scratch.clone(),
     };
     let pb = spinner("diagnosing");
     let report = crane_diagnose::diagnose(dataset, &opts)
-        .map_err(|e| anyhow::anyhow!("{e}"))
+        .map_err(|e| {
+            // the scratch folder is ours: name the folder the user gave
+            let mut m = e.to_string();
+            if let (Some(s), Some(p)) = (&scratch, &plots) {
+                m = m.replace(&s.display().to_string(), &p.display().to_string());
+            }
+            anyhow::anyhow!(m)
+        })
         .with_context(|| format!("diagnose {}", dataset.display()))?;
     pb.finish_and_clear();
-    if let Some(path) = report_file {
-        outputs.write(path, report.to_json())?;
+    if let (Some(s), Some(p)) = (&scratch, &plots) {
+        stage_drawn(&mut outputs, s, p)?;
     }
+    if let Some(path) = report_file {
+        outputs.stage(path, report.to_json())?;
+    }
+    outputs.commit()?;
     if json {
         out!("{}", report.to_json().trim_end());
         return Ok(());
     }
     out!("{}", report.summary().trim_end());
+    Ok(())
+}
+
+/// Stages every file a library drew into the scratch folder `scratch` for the same name in
+/// `dir`, in name order.
+fn stage_drawn(outputs: &mut Outputs, scratch: &Path, dir: &Path) -> Result<()> {
+    let mut names: Vec<std::ffi::OsString> = std::fs::read_dir(scratch)
+        .with_context(|| format!("read {}", scratch.display()))?
+        .flatten()
+        .filter(|e| e.file_type().is_ok_and(|t| t.is_file()))
+        .map(|e| e.file_name())
+        .collect();
+    names.sort();
+    for name in names {
+        outputs.adopt(&dir.join(&name), &scratch.join(&name))?;
+    }
     Ok(())
 }
 
@@ -402,6 +431,10 @@ pub struct DemoReport {
 /// `out/params.toml`, `out/plots`: the defaults of `crane identify` and `crane validate` when
 /// `out` is `out`). A data set already in `out/dataset` is replaced only when the virtual rig
 /// wrote it (it holds `truth_params.toml`) or with `force`.
+///
+/// One command, one commit: the new data set is identified and validated in its scratch
+/// folder, and the data set, the parameter file and the plots are published together at the
+/// end. A failure or Ctrl-C on the way leaves `out` as it was.
 pub fn demo(out: &Path, force: bool, json: bool) -> Result<DemoReport> {
     let dataset = out.join("dataset");
     let params = out.join("params.toml");
@@ -413,9 +446,27 @@ pub fn demo(out: &Path, force: bool, json: bool) -> Result<DemoReport> {
     } else {
         Replace::Never
     };
-    let rig = rig_with(&dataset, None, replace, json)?;
-    let identify = identify(&dataset, &params, &plots, force, json)?;
-    let validate = validate(&dataset, &params, &plots, force, json)?;
+    let mut outputs = Outputs::new(force);
+    outputs.check_dir(out)?;
+    outputs.check(&params)?;
+    outputs.check_dir(&plots)?;
+    let pb = spinner("virtual rig: running the paper's experiments");
+    let (rig, staged) = rig_stage(&dataset, &RigOptions::default(), replace, &mut outputs)?;
+    pb.finish_and_clear();
+    let (identify, id_files) = identify_stage(&staged, &dataset, &params, &plots, &mut outputs)?;
+    let (validate, val_files) = validate_stage(
+        &staged,
+        &dataset,
+        (&identify.params, "the identified parameters"),
+        &plots,
+        &mut outputs,
+    )?;
+    outputs.commit()?;
+    if !json {
+        print_rig(&rig)?;
+        print_identified(&identify, &params, &id_files)?;
+        print_validation(&validate, &val_files)?;
+    }
     Ok(DemoReport {
         rig,
         identify,

@@ -6,9 +6,10 @@ use crane_tools::output::Outputs;
 use crane_tools::{figures, montecarlo, study, workprec};
 use std::path::Path;
 
-/// `crane study`: both cases, the table (or JSON), the figures and `study.json` in `out`.
+/// `crane study`: both cases, the table (or JSON), the figures and `study.json` in `out`
+/// (published together at the end, or none).
 pub fn study(out: &Path, json: bool, quick: bool, budget: f64, force: bool) -> Result<()> {
-    let outputs = Outputs::new(force);
+    let mut outputs = Outputs::new(force);
     let jpath = out.join("study.json");
     // refuse before minutes of work: the folder (a file there is no folder) and the JSON
     outputs.check_dir(out)?;
@@ -26,8 +27,8 @@ pub fn study(out: &Path, json: bool, quick: bool, budget: f64, force: bool) -> R
     let (r2, d2) = study::run_case(&c2, &opts, progress)?;
     let reports = vec![r1, r2];
     let js = serde_json::to_string_pretty(&reports)?;
-    outputs.write(&jpath, &js)?;
-    let mut figs = figures::write(out, &d1, &d2, &outputs)?;
+    outputs.stage(&jpath, &js)?;
+    let mut figs = figures::write(out, &d1, &d2, &mut outputs)?;
     for (r, name) in reports.iter().zip(["case1", "case2"]) {
         if r.work_precision.is_empty() {
             continue;
@@ -37,9 +38,11 @@ pub fn study(out: &Path, json: bool, quick: bool, budget: f64, force: bool) -> R
             "{}: work-precision (wall time against velocity RMSE)",
             if name == "case1" { "Case 1" } else { "Case 2" }
         );
-        workprec::diagram(&p, &title, &r.work_precision, &r.levels, &outputs)?;
+        workprec::diagram(&p, &title, &r.work_precision, &r.levels, &mut outputs)?;
         figs.push(p);
     }
+    // the figures and study.json together, or none of them
+    outputs.commit()?;
     if json {
         out!("{js}");
     } else {

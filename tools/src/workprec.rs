@@ -324,20 +324,20 @@ pub fn table(name: &str, levels: &[Level]) -> String {
 type Dyn = Box<dyn std::error::Error>;
 
 /// Draws the work-precision diagram (time against error, log-log) of one case as SVG into
-/// `path` (atomically, under the policy `outputs`).
+/// `path` (staged in `outputs`, published by its commit).
 pub fn diagram(
     path: &Path,
     title: &str,
     pts: &[Point],
     levels: &[Level],
-    outputs: &Outputs,
+    outputs: &mut Outputs,
 ) -> Result<()> {
     let mut svg = String::new();
     draw(&mut svg, title, pts, levels).map_err(|e| Error::Plot {
         path: path.to_path_buf(),
         message: e.to_string(),
     })?;
-    outputs.write(path, svg)?;
+    outputs.stage(path, svg)?;
     Ok(())
 }
 

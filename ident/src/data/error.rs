@@ -2,6 +2,7 @@
 //! column). Every text taken from a user's file is clipped to [`CLIP_CHARS`] characters
 //! before it enters a message.
 
+use crate::num::Num;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -135,7 +136,7 @@ pub enum Problem {
     #[error("not finite: `{0}`")]
     NotFinite(String),
     /// Time does not increase.
-    #[error("time does not increase ({this} after {prev})")]
+    #[error("time does not increase ({} after {})", Num(*this), Num(*prev))]
     TimeNotIncreasing {
         /// Previous time [s].
         prev: f64,
@@ -146,7 +147,7 @@ pub enum Problem {
     #[error("{0}")]
     Timing(Timing),
     /// A value outside the plausible range of its unit.
-    #[error("{value} is outside [{min}, {max}] {unit} (wrong unit or sign convention?)")]
+    #[error("{} is outside [{}, {}] {unit} (wrong unit or sign convention?)", Num(*value), Num(*min), Num(*max))]
     OutOfRange {
         /// Value.
         value: f64,
@@ -163,7 +164,7 @@ pub enum Problem {
     BlankField(&'static str),
     /// Two rows with the same time stamp give different values in one column (an
     /// asynchronous log's rows at one instant may only complete each other).
-    #[error("this row has the time stamp of line {first_line} but another value in this column ({this} against {first}): rows at one instant may only fill each other's empty fields")]
+    #[error("this row has the time stamp of line {first_line} but another value in this column ({} against {}): rows at one instant may only fill each other's empty fields", Num(*this), Num(*first))]
     SameStampConflict {
         /// Line of the first row with this stamp.
         first_line: usize,
@@ -184,7 +185,7 @@ pub enum Problem {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum Timing {
     /// A step longer than `MAX_GAP_STEPS` median steps: rows were lost.
-    #[error("rows missing: the time step before this row is {step_s} s, {:.1} times the median step {median_step_s} s (more than {}); holding the last value over the gap would invent a rest, so the run is refused (split it into runs at the gap)", step_s / median_step_s, crate::data::timebase::MAX_GAP_STEPS)]
+    #[error("rows missing: the time step before this row is {} s, {:.1} times the median step {} s (more than {}); holding the last value over the gap would invent a rest, so the run is refused (split it into runs at the gap)", Num(*step_s), step_s / median_step_s, Num(*median_step_s), crate::data::timebase::MAX_GAP_STEPS)]
     Gap {
         /// The step [s].
         step_s: f64,
@@ -194,13 +195,13 @@ pub enum Timing {
     /// A median sample rate outside [`crate::data::timebase::RATE_RANGE_HZ`]: almost surely
     /// stamps in another unit than `time_unit` says (milliseconds or sample indices read as
     /// seconds, or the reverse).
-    #[error("the median time step is {median_step_s} s, a sample rate of {:.4e} Hz, outside ({}, {}) Hz: is `time_unit` in dataset.toml right (\"s\", \"ms\", \"us\")? time stamps in milliseconds or sample indices read as seconds give 1 Hz or less", 1.0 / median_step_s, crate::data::timebase::RATE_RANGE_HZ.0, crate::data::timebase::RATE_RANGE_HZ.1)]
+    #[error("the median time step is {} s, a sample rate of {:.4e} Hz, outside ({}, {}) Hz: is `time_unit` in dataset.toml right (\"s\", \"ms\", \"us\")? time stamps in milliseconds or sample indices read as seconds give 1 Hz or less", Num(*median_step_s), 1.0 / median_step_s, crate::data::timebase::RATE_RANGE_HZ.0, crate::data::timebase::RATE_RANGE_HZ.1)]
     Rate {
         /// The run's median step [s].
         median_step_s: f64,
     },
     /// Irregular stamps in a crane run, which must be uniformly sampled.
-    #[error("irregular time stamps: the step ending here is {step_s} s, the median step {median_step_s} s ({irregular_steps} steps deviate more than {:.0} %); crane runs must be uniformly sampled (rows dropped or an asynchronous log?)", crate::data::timebase::JITTER_TOLERANCE * 100.0)]
+    #[error("irregular time stamps: the step ending here is {} s, the median step {} s ({irregular_steps} steps deviate more than {:.0} %); crane runs must be uniformly sampled (rows dropped or an asynchronous log?)", Num(*step_s), Num(*median_step_s), crate::data::timebase::JITTER_TOLERANCE * 100.0)]
     IrregularCrane {
         /// The most deviating step [s].
         step_s: f64,

@@ -301,42 +301,125 @@ pub fn crane_run(table: &Table, renames: &BTreeMap<String, String>) -> Result<Cr
     })
 }
 
-/// The 99th percentile of a run's sample-to-sample speed must be within the unit's
-/// [`PositionUnit::max_speed`]: beyond it the positions are almost surely in another unit than
-/// declared (millimetres read as metres), and every fitted inertia and friction would be off
-/// by that factor without a word. (The percentile, not the maximum: an encoder glitch moves
-/// two differences.)
-fn check_speed(table: &Table, t: &[f64], x: &[f64], unit: PositionUnit) -> Result<(), DataError> {
+/// The 99th percentile of the speed `|dx/dt|` of a run [unit/s] over steps of one refresh
+/// of the position (one row, or the rows a held channel repeats its value over:
+/// [`timebase::held_channel`], whose jumps would otherwise count as that many times faster).
+/// The percentile, not the maximum: an encoder glitch moves two differences. `None` without
+/// a finite difference.
+pub fn p99_speed(t: &[f64], x: &[f64]) -> Option<f64> {
+    let lag = timebase::held_channel(x).map_or(1, |(r, _)| r.max(1));
     let mut v: Vec<f64> = t
-        .windows(2)
-        .zip(x.windows(2))
-        .map(|(t, x)| ((x[1] - x[0]) / (t[1] - t[0])).abs())
+        .iter()
+        .zip(t.iter().skip(lag))
+        .zip(x.iter().zip(x.iter().skip(lag)))
+        .map(|((t0, t1), (x0, x1))| ((x1 - x0) / (t1 - t0)).abs())
         .filter(|v| v.is_finite())
         .collect();
     if v.is_empty() {
-        return Ok(());
+        return None;
     }
     let k = ((v.len() - 1) as f64 * 0.99) as usize;
     let (_, p99, _) = v.select_nth_unstable_by(k, f64::total_cmp);
+    Some(*p99)
+}
+
+/// What to look at when positions move implausibly fast: the unit keys of `dataset.toml`.
+/// Crane runs have fixed units (metres, radians, seconds unless `time_unit`); a single-axis
+/// run also has `position_unit` and `position_scale`.
+fn unit_keys_hint(unit: PositionUnit, crane: bool) -> String {
+    let time =
+        "time stamps in seconds declared as milliseconds (`time_unit`) are 1000 times too fast";
+    if crane {
+        return format!("is `time_unit` in dataset.toml right? {time}");
+    }
+    let small = if unit.is_metre() {
+        "millimetres"
+    } else {
+        "milliradians"
+    };
+    format!(
+        "are they in another unit than position_unit = \"{}\"? for {small} set \
+         position_scale = 0.001 in dataset.toml{}; {time}",
+        unit.symbol(),
+        if unit.is_metre() {
+            ""
+        } else {
+            " (for degrees 0.017453292519943295)"
+        }
+    )
+}
+
+/// The 99th percentile of a run's speed between samples ([`p99_speed`]) must be within the
+/// unit's [`PositionUnit::max_speed`]: beyond it the positions are almost surely in another
+/// unit than declared (millimetres read as metres) or the time stamps are (seconds declared
+/// as milliseconds), and every fitted inertia and friction would be off by that factor
+/// without a word. The error names the unit keys to look at ([`unit_keys_hint`]).
+fn check_speed(
+    table: &Table,
+    column: &str,
+    t: &[f64],
+    x: &[f64],
+    unit: PositionUnit,
+    crane: bool,
+) -> Result<(), DataError> {
+    let Some(p99) = p99_speed(t, x) else {
+        return Ok(());
+    };
     let limit = unit.max_speed();
-    if *p99 > limit {
+    if p99 > limit {
+        let u = unit.symbol();
         return Err(err(
             &table.file,
             None,
             None,
             Problem::BadValue(format!(
-                "the positions move at {:.3e} {}/s (99th percentile of the sample-to-sample \
-                 speed), beyond a plausible {limit:e} {}/s: are they in another unit than \
-                 position_unit = \"{}\"? for millimetres or milliradians set \
-                 position_scale = 0.001 in dataset.toml",
-                *p99,
-                unit.symbol(),
-                unit.symbol(),
-                unit.symbol()
+                "the positions `{column}` move at {p99:.3e} {u}/s (99th percentile of the \
+                 speed between samples), beyond a plausible {limit:e} {u}/s: {}",
+                unit_keys_hint(unit, crane)
             )),
         ));
     }
     Ok(())
+}
+
+/// The data set's fastest single-axis run, when its speed ([`p99_speed`]) is beyond the
+/// [`PositionUnit::typical_speed`] of its unit (but within the plausible
+/// [`PositionUnit::max_speed`], which is an error): a [`LoadNote::UnitSuspect`] on that run,
+/// once per data set, naming the unit keys. The data still load: a motor shaft or a fast
+/// linear motor can be that fast.
+fn note_fast_positions(runs: &mut [Run]) {
+    let fastest = runs
+        .iter()
+        .enumerate()
+        .filter_map(|(i, r)| r.axis().map(|a| (i, a)))
+        .filter_map(|(i, a)| p99_speed(&a.t, &a.x).map(|v| (i, v, a.position_unit)))
+        .max_by(|a, b| a.1.total_cmp(&b.1));
+    let Some((i, speed, unit)) = fastest else {
+        return;
+    };
+    if speed <= unit.typical_speed() {
+        return;
+    }
+    if let Samples::Axis(a) = &mut runs[i].samples {
+        let u = unit.symbol();
+        a.notes.push(LoadNote::UnitSuspect(format!(
+            "the positions move at up to {speed:.3e} {u}/s (99th percentile of the speed \
+             between samples, the fastest run), beyond the {} {u}/s typical of {}: {} \
+             (a {} may be this fast: then ignore this note)",
+            unit.typical_speed(),
+            if unit.is_metre() {
+                "a positioning axis"
+            } else {
+                "a joint or direct drive"
+            },
+            unit_keys_hint(unit, false),
+            if unit.is_metre() {
+                "linear motor"
+            } else {
+                "motor shaft"
+            }
+        )));
+    }
 }
 
 /// Reads a single-axis run: `t`, `x` and either `force` (an effort: N or N m, gain 1) or `u`
@@ -354,7 +437,7 @@ pub fn axis_run(
     let (plo, phi) = position_unit.range();
     let xr = Some((plo, phi, position_unit.symbol()));
     let x = table.take("x", renames, xr)?;
-    check_speed(table, &t, &x, position_unit)?;
+    check_speed(table, "x", &t, &x, position_unit, false)?;
     let (u_name, input_unit, gain) = if table.find("force", renames).is_some() {
         let effort = position_unit.effort_unit();
         if let Some(iu) = ds.input_unit.filter(|iu| *iu != effort) {
@@ -507,7 +590,15 @@ pub fn load_run(dir: &Path, ds: &DatasetSpec, spec: &RunSpec) -> Result<Run, Dat
                 ),
             )
         })?;
-        (Samples::Crane(crane_run(&table, &renames)?), payload)
+        let run = crane_run(&table, &renames)?;
+        if !ds.time_unit.is_second() {
+            // the ranges catch positions in another unit; time stamps in seconds declared
+            // in a smaller unit show as speeds 1000 times too high
+            for (name, q) in [("x", &run.x), ("y", &run.y), ("l", &run.l)] {
+                check_speed(&table, name, &run.t, q, PositionUnit::Metre, true)?;
+            }
+        }
+        (Samples::Crane(run), payload)
     } else {
         if let Some(k) = ds.position_scale {
             table.scale("x", &renames, k);
@@ -585,11 +676,12 @@ pub fn load_dataset(dir: &Path) -> Result<Dataset, DataError> {
             })
             .collect();
     }
-    let runs = spec
+    let mut runs = spec
         .runs
         .iter()
         .map(|r| load_run(dir, &spec, r))
         .collect::<Result<Vec<_>, _>>()?;
+    note_fast_positions(&mut runs);
     Ok(Dataset {
         dir: dir.to_path_buf(),
         spec,

@@ -83,6 +83,10 @@ pub enum LoadNote {
     /// An asynchronous log: rows at one stamp merged, empty fields held
     /// ([`super::asynchronous`]).
     Filled(super::asynchronous::Filled),
+    /// A derived quantity beyond what is typical of the axis (positions that move faster
+    /// than [`super::PositionUnit::typical_speed`]): probably a wrong unit key; the message
+    /// names the keys of `dataset.toml` to look at.
+    UnitSuspect(String),
 }
 
 impl fmt::Display for LoadNote {
@@ -116,6 +120,7 @@ impl fmt::Display for LoadNote {
                 repeated_share * 100.0
             ),
             LoadNote::Filled(what) => write!(f, "{what}"),
+            LoadNote::UnitSuspect(what) => write!(f, "warning: {what}"),
         }
     }
 }

@@ -48,6 +48,19 @@ impl PositionUnit {
         }
     }
 
+    /// Peak speed [m/s or rad/s] typical of the axes this tool is for: 2 m/s (screw, belt
+    /// and carriage positioning axes, the crane's drives) and 20 rad/s (190 rpm: robot joints
+    /// and direct drives). Faster data load, with a note naming the unit keys
+    /// (`position_unit`, `position_scale`, `time_unit`): millimetres or milliradians read as
+    /// metres or radians, or seconds declared as milliseconds, are 1000 times faster. A fast
+    /// linear motor or a motor shaft can be this fast: then the note is to be ignored.
+    pub fn typical_speed(self) -> f64 {
+        match self {
+            PositionUnit::Metre => 2.0,
+            PositionUnit::Radian => 20.0,
+        }
+    }
+
     /// `true` for metre (the default, not written out).
     pub fn is_metre(&self) -> bool {
         *self == PositionUnit::Metre

@@ -368,14 +368,15 @@ fn targets(req: &Request) -> (Option<PathBuf>, Option<PathBuf>) {
     )
 }
 
-/// Decodes `req.log` and writes its report and plot (atomically; never over the log, a data
-/// set's file or each other). Refused outputs are found before the log is read.
+/// Decodes `req.log` and writes its report and plot (atomically and together, or neither;
+/// never over the log, a data set's file or each other). Refused outputs are found before
+/// the log is read.
 pub fn run(req: &Request) -> Result<Done, Error> {
     let (lo, hi) = PERIOD_S_RANGE;
     if !(req.period_s >= lo && req.period_s <= hi) {
         return Err(Error::Period(req.period_s));
     }
-    let outputs = Outputs::new(false).input(&req.log);
+    let mut outputs = Outputs::new(false).input(&req.log);
     if let Some(dir) = &req.out {
         outputs.check_dir(dir)?;
     }
@@ -393,19 +394,18 @@ pub fn run(req: &Request) -> Result<Done, Error> {
         }
     }
     let report = parse::read(&req.log, req.period_s)?;
-    let mut written = Vec::new();
     if let Some(path) = json {
-        outputs.write(&path, serde_json::to_string_pretty(&report)? + "\n")?;
-        written.push(path);
+        outputs.stage(&path, serde_json::to_string_pretty(&report)? + "\n")?;
     }
     if let Some(path) = svg {
         let text = plot::svg(&report).map_err(|message| Error::Plot {
             path: path.clone(),
             message,
         })?;
-        outputs.write(&path, text)?;
-        written.push(path);
+        outputs.stage(&path, text)?;
     }
+    // both or neither
+    let written = outputs.commit()?;
     Ok(Done { report, written })
 }
 
