@@ -515,6 +515,16 @@ fn stiction_col(g: &Gathered, vs: f64) -> Vec<f64> {
 /// recorded voltages held); returns the drive positions per sample, or `None` if the model
 /// rejects a step.
 pub fn simulate(run: &CraneRun, params: &Params, ext: &Extensions) -> Option<Vec<[f64; 3]>> {
+    simulate_checked(run, params, ext).ok()
+}
+
+/// [`simulate`], with the model's reason when it fails: the parameter or state field it
+/// refuses, or the step and time [s] at which a step fails.
+pub fn simulate_checked(
+    run: &CraneRun,
+    params: &Params,
+    ext: &Extensions,
+) -> Result<Vec<[f64; 3]>, String> {
     let dt = run.dt();
     let q0 = [run.x[0], run.y[0], run.l[0], run.alpha[0], run.beta[0]];
     let c: Crane = Crane::new(
@@ -528,18 +538,46 @@ pub fn simulate(run: &CraneRun, params: &Params, ext: &Extensions) -> Option<Vec
             qd: [0.0; 5],
         },
     )
-    .ok()?;
-    let mut c = c.with_extensions(ext).ok()?;
+    .map_err(|e| e.to_string())?;
+    let mut c = c.with_extensions(ext).map_err(|e| e.to_string())?;
     let mut out = Vec::with_capacity(run.len());
     for k in 0..run.len() {
         let s = c.state().q;
         out.push([s[0], s[1], s[2]]);
         let u = [run.u[0][k], run.u[1][k], run.u[2][k]];
         for _ in 0..2 {
-            c.step(u).ok()?;
+            c.step(u)
+                .map_err(|e| format!("sample {k} (t = {:.4} s): {e}", k as f64 * dt))?;
         }
     }
-    Some(out)
+    Ok(out)
+}
+
+/// Why the baseline does not score: the first run it does not simulate, with the model's
+/// reason, or no held-out sample at all. `doc` says which baseline it is.
+fn baseline_failure(preps: &[Prep], names: &[&str], doc: &str) -> DiagnoseError {
+    for (p, name) in preps.iter().zip(names) {
+        // a run that starts outside the travel: said in the data set's and the file's terms
+        let (q, k) = (&p.params, [("x", "x"), ("y", "y"), ("l", "rope")]);
+        let travel = [&q.x, &q.y, &q.rope];
+        let first = [p.run.x.first(), p.run.y.first(), p.run.l.first()];
+        for ((col, key), (a, v)) in k.iter().zip(travel.iter().zip(first)) {
+            if let Some(&v) = v.filter(|&&v| !(v >= a.min && v <= a.max)) {
+                return DiagnoseError::Model(format!(
+                    "the baseline ({doc}) does not simulate run {name}: its first `{col}` = {v:.4} m is outside the travel [{key}.min, {key}.max] = [{}, {}]",
+                    a.min, a.max
+                ));
+            }
+        }
+        if let Err(e) = simulate_checked(p.run, &p.params, &Extensions::default()) {
+            return DiagnoseError::Model(format!(
+                "the baseline ({doc}) does not simulate run {name}: {e}"
+            ));
+        }
+    }
+    DiagnoseError::Model(format!(
+        "the baseline ({doc}) leaves no held-out sample to score"
+    ))
 }
 
 struct Ctx<'a> {
@@ -730,9 +768,14 @@ pub fn diagnose_crane(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, Di
         ranges,
         floor,
     };
+    let names: Vec<&str> = runs
+        .iter()
+        .filter(|r| r.crane().is_some())
+        .map(|r| r.name.as_str())
+        .collect();
     let before_h = ctx
         .nmae(None, true)
-        .ok_or_else(|| DiagnoseError::Model("the baseline simulation failed".into()))?;
+        .ok_or_else(|| baseline_failure(&ctx.preps, &names, &base_doc))?;
     let before_f = ctx.nmae(None, false).unwrap_or([f64::NAN; 3]);
     let fit_g: Vec<Gathered> = (0..3).map(|i| gather(&ctx.preps, i, false)).collect();
     let held_g: Vec<Gathered> = (0..3).map(|i| gather(&ctx.preps, i, true)).collect();

@@ -381,6 +381,13 @@ pub fn diagnose(
             if let (Some(s), Some(p)) = (&scratch, &plots) {
                 m = m.replace(&s.display().to_string(), &p.display().to_string());
             }
+            // the baseline's parameters came from a file: name it
+            if let Some(p) = &params {
+                m = m.replace(
+                    "the given parameters",
+                    &format!("the parameters of {}", p.display()),
+                );
+            }
             anyhow::anyhow!(m)
         })
         .with_context(|| format!("diagnose {}", dataset.display()))?;

@@ -400,6 +400,19 @@ fn errors_name_the_file_and_the_key_once() {
         "{e}"
     );
     assert!(!d.join("st.csv").exists());
+    // `diagnose --params` whose travel excludes where the runs start: the file, the run and
+    // the key (before: "model: the baseline simulation failed")
+    let o = crane(&d, &["rig", "--out", "ds"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = crane(&d, &["diagnose", "ds", "--params", "lim.toml"]);
+    let e = stderr(&o);
+    assert!(
+        !o.status.success()
+            && e.contains("lim.toml")
+            && e.contains("does not simulate run 0")
+            && e.contains("[x.min, x.max] = [0, 0.2]"),
+        "{e}"
+    );
     let _ = std::fs::remove_dir_all(&d);
 }
 
