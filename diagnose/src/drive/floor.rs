@@ -39,11 +39,14 @@ fn on_count(x: f64, x0: f64, q: f64) -> f64 {
 }
 
 /// The value of the samples `y` (every `h` from 0) at `s`, linearly interpolated, held
-/// beyond either end.
+/// beyond either end; NaN when there are no samples.
 fn at(y: &[f64], h: f64, s: f64) -> f64 {
-    let f = (s / h).clamp(0.0, (y.len() - 1) as f64);
-    let i = (f.floor() as usize).min(y.len() - 1);
-    let j = (i + 1).min(y.len() - 1);
+    let Some(last) = y.len().checked_sub(1) else {
+        return f64::NAN;
+    };
+    let f = (s / h).clamp(0.0, last as f64);
+    let i = (f.floor() as usize).min(last);
+    let j = (i + 1).min(last);
     y[i] + (y[j] - y[i]) * (f - i as f64)
 }
 
@@ -135,5 +138,6 @@ mod tests {
         // before the first sample and after the last one: held
         assert_eq!(at(&y, 0.5, -0.3), 0.0);
         assert_eq!(at(&y, 0.5, 7.0), 4.0);
+        assert!(at(&[], 0.5, 1.0).is_nan());
     }
 }
