@@ -293,21 +293,7 @@ pub fn estimate(
     level: DryLevel,
 ) -> Result<Estimate, EstimateError> {
     // --- 1. sliding least squares -------------------------------------------------------
-    let mut rows: Vec<(f64, f64, f64, f64, f64)> = Vec::new(); // (F, a, shape, v, x)
-    for p in fit {
-        for i in 0..p.run.x.len() {
-            if p.v[i].abs() > th.v_slide {
-                let f = applied_input(&p.run.u, i, &s);
-                rows.push((
-                    f - s.load * p.v[i].signum() * f.abs(),
-                    p.a[i],
-                    restoring_shape(motion, p.run.x[i], center),
-                    p.v[i],
-                    p.run.x[i],
-                ));
-            }
-        }
-    }
+    let mut rows = sliding_rows(fit, th, motion, center, &s);
     let n_pos = rows.iter().filter(|r| r.3 > 0.0).count();
     let n_neg = rows.len() - n_pos;
     let fit_pos = n_pos >= MIN_DIRECTION_ROWS;
@@ -345,37 +331,8 @@ pub fn estimate(
     let mut kin_flags = Vec::new();
     let mut gaps: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
     for _pass in 0..2 {
-        // the force withstood at an onset, net of the position force and offset, and with
-        // load-dependent friction net of its load share (`F - mu |F|` is the dry level)
-        let net = |p: &Prepared, i: usize| {
-            let f = applied_input(&p.run.u, i, &s);
-            f - ls.stiffness * restoring_shape(motion, p.run.x[i], center) + ls.offset - s.load * f
-        };
-        // the bump's share of the force withstood where an onset rests
-        let bump_at =
-            |p: &Prepared, i: usize| s.bump.map_or(0.0, |site| ls.bump * site.kernel(p.run.x[i]));
-        first_motion = [Vec::new(), Vec::new()];
-        let mut onsets: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
-        for p in fit {
-            for dir in Dir::BOTH {
-                let sg = dir.sign();
-                let m = motions(&p.v, th.v_move, sg);
-                // first motion: the run must start at rest
-                if p.v.iter().take(3).all(|v| v.abs() <= th.v_move) {
-                    if let Some(&(i, _)) = m.first() {
-                        let o = onset(p, i, sg);
-                        first_motion[dir.index()].push(sg * net(p, o) - bump_at(p, o));
-                    }
-                }
-                // every onset after at least 3 samples at rest
-                for &(i, _) in &m {
-                    if i >= 3 && p.v[i - 3..i].iter().all(|v| v.abs() <= th.v_move) {
-                        let o = onset(p, i, sg);
-                        onsets[dir.index()].push(sg * net(p, o) - bump_at(p, o));
-                    }
-                }
-            }
-        }
+        let onsets;
+        (first_motion, onsets) = onset_levels(fit, th, &s, motion, center, &ls);
         breakaway_scatter = [std_dev(&onsets[0]), std_dev(&onsets[1])];
         kin_flags.clear();
         for dir in Dir::BOTH {
@@ -436,7 +393,6 @@ pub fn estimate(
     }
     flags.extend(ls.flags.iter().copied());
     flags.extend(kin_flags);
-    let (inertia, stiffness, offset) = (ls.inertia, ls.stiffness, ls.offset);
     let (mut kin, mut visc) = (ls.kin, ls.visc);
     // a direction that was not fitted copies the other one
     if !fit_pos {
@@ -450,6 +406,108 @@ pub fn estimate(
     for d in 0..2 {
         kin[d] = kin[d].min(brk[d]);
     }
+    let params = drive_params(motion, center, &s, &ls, kin, visc, brk);
+    Ok(Estimate {
+        params,
+        structure: s,
+        flags,
+        first_motion,
+        breakaway_scatter,
+        kinetic_ls,
+        slip_gaps: gaps,
+        rows: rows.len(),
+        level,
+    })
+}
+
+/// The sliding samples as least-squares rows `(F, a, shape, v, x)`: the applied force (net of
+/// the load share `mu |F|` against the motion) [force units], the acceleration [m/s^2 or
+/// rad/s^2], the restoring shape, the velocity and the position.
+fn sliding_rows(
+    fit: &[&Prepared],
+    th: &Thresholds,
+    motion: Motion,
+    center: f64,
+    s: &Structure,
+) -> Vec<(f64, f64, f64, f64, f64)> {
+    let mut rows = Vec::new();
+    for p in fit {
+        for i in 0..p.run.x.len() {
+            if p.v[i].abs() > th.v_slide {
+                let f = applied_input(&p.run.u, i, s);
+                rows.push((
+                    f - s.load * p.v[i].signum() * f.abs(),
+                    p.a[i],
+                    restoring_shape(motion, p.run.x[i], center),
+                    p.v[i],
+                    p.run.x[i],
+                ));
+            }
+        }
+    }
+    rows
+}
+
+/// The force withstood where the axis leaves rest, per direction (`[positive, negative]`,
+/// each as a positive level [force units]): at the first motion of runs that start at rest,
+/// and at every onset after at least 3 samples at rest. Net of the fitted position force,
+/// offset and bump, and with load-dependent friction net of its load share (`F - mu |F|` is
+/// the dry level).
+fn onset_levels(
+    fit: &[&Prepared],
+    th: &Thresholds,
+    s: &Structure,
+    motion: Motion,
+    center: f64,
+    ls: &LsFit,
+) -> ([Vec<f64>; 2], [Vec<f64>; 2]) {
+    // the force withstood at an onset, net of the position force and offset, and with
+    // load-dependent friction net of its load share (`F - mu |F|` is the dry level)
+    let net = |p: &Prepared, i: usize| {
+        let f = applied_input(&p.run.u, i, s);
+        f - ls.stiffness * restoring_shape(motion, p.run.x[i], center) + ls.offset - s.load * f
+    };
+    // the bump's share of the force withstood where an onset rests
+    let bump_at =
+        |p: &Prepared, i: usize| s.bump.map_or(0.0, |site| ls.bump * site.kernel(p.run.x[i]));
+    let mut first_motion: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
+    let mut onsets: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
+    for p in fit {
+        for dir in Dir::BOTH {
+            let sg = dir.sign();
+            let m = motions(&p.v, th.v_move, sg);
+            // first motion: the run must start at rest
+            if p.v.iter().take(3).all(|v| v.abs() <= th.v_move) {
+                if let Some(&(i, _)) = m.first() {
+                    let o = onset(p, i, sg);
+                    first_motion[dir.index()].push(sg * net(p, o) - bump_at(p, o));
+                }
+            }
+            // every onset after at least 3 samples at rest
+            for &(i, _) in &m {
+                if i >= 3 && p.v[i - 3..i].iter().all(|v| v.abs() <= th.v_move) {
+                    let o = onset(p, i, sg);
+                    onsets[dir.index()].push(sg * net(p, o) - bump_at(p, o));
+                }
+            }
+        }
+    }
+    (first_motion, onsets)
+}
+
+/// The model's parameters from the final least squares `ls` with the dry levels `kin`
+/// (kinetic) and `brk` (breakaway) and viscous coefficients `visc`, each `[positive,
+/// negative]`.
+fn drive_params(
+    motion: Motion,
+    center: f64,
+    s: &Structure,
+    ls: &LsFit,
+    kin: [f64; 2],
+    visc: [f64; 2],
+    brk: [f64; 2],
+) -> DriveParams {
+    let (inertia, stiffness, offset) = (ls.inertia, ls.stiffness, ls.offset);
     let position_force = if s.restoring {
         match motion {
             Motion::Rotary => PositionForce::Pendulum { stiffness, center },
@@ -458,7 +516,7 @@ pub fn estimate(
     } else {
         PositionForce::None
     };
-    let params = DriveParams {
+    DriveParams {
         motion,
         inertia,
         gain: 1.0,
@@ -484,18 +542,7 @@ pub fn estimate(
             },
             None => LocalFriction::None,
         },
-    };
-    Ok(Estimate {
-        params,
-        structure: s,
-        flags,
-        first_motion,
-        breakaway_scatter,
-        kinetic_ls,
-        slip_gaps: gaps,
-        rows: rows.len(),
-        level,
-    })
+    }
 }
 
 /// One sliding least-squares solve.

@@ -119,6 +119,26 @@ pub fn own_log(
     Some(b.best_selection()).filter(|e| e.is_finite())
 }
 
+/// The held-out NMAE of the encoder's own error: half a count over the held-out runs' mean
+/// position range (each floored at a count) [%].
+pub fn encoder(held: &[&Prepared], th: &Thresholds) -> f64 {
+    let range_mean = held
+        .iter()
+        .map(|r| {
+            let (lo, hi) = r
+                .run
+                .x
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
+                    (l.min(x), h.max(x))
+                });
+            (hi - lo).max(th.quantum)
+        })
+        .sum::<f64>()
+        / held.len() as f64;
+    100.0 * 0.5 * th.quantum / range_mean
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

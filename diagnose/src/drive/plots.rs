@@ -8,9 +8,9 @@
 //!   fitted friction curves of the baseline and the final model and their breakaway levels.
 
 use super::estimate::{applied_input, restoring_shape};
+use super::pipeline::DriveInfo;
 use super::prep::{Prepared, Thresholds};
 use super::score::Scored;
-use super::select::DriveInfo;
 use crane_model::drive::{DriveParams, PositionForce};
 use plotters::prelude::*;
 use std::path::Path;
@@ -58,7 +58,7 @@ pub fn write_all(
     th: &Thresholds,
     info: &DriveInfo,
 ) -> Result<(), Dyn> {
-    crane_ident::atomic::create_dir(dir)?;
+    crane_ident::atomic::create_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     for (i, r) in held.iter().enumerate() {
         let path = dir.join(format!("heldout_{}.svg", stem(&r.run.name)));
         write_svg(&path, |svg| {
@@ -71,11 +71,12 @@ pub fn write_all(
 }
 
 /// Draws a plot into a string and writes it atomically to `path`, with the tool's mark
-/// ([`crate::mark_plot`]).
+/// ([`crate::mark_plot`]); an error names the file.
 fn write_svg(path: &Path, draw: impl FnOnce(&mut String) -> Result<(), Dyn>) -> Result<(), Dyn> {
+    let named = |e: &dyn std::fmt::Display| format!("plot {}: {e}", path.display());
     let mut svg = String::new();
-    draw(&mut svg)?;
-    crane_ident::atomic::write(path, crate::mark_plot(&svg))?;
+    draw(&mut svg).map_err(|e| named(&e))?;
+    crane_ident::atomic::write(path, crate::mark_plot(&svg)).map_err(|e| named(&e))?;
     Ok(())
 }
 

@@ -1,0 +1,198 @@
+//! Trying one cause: the current structure extended by it, fitted on the fitting runs and
+//! scored on the held-out ones. Causes with a value to search (dead band, saturation, load
+//! share, delay, the bump's site) are searched on grids chosen on the fitting runs only
+//! ([`super::grid`]), and a value at a grid's edge comes back with a note: it is never named.
+
+use super::estimate::{BumpSite, Estimate, Structure};
+use super::experiment::Experiment;
+use super::prep::{Prepared, Thresholds};
+use super::score::Scored;
+use crate::Cause;
+
+/// Dead bands tried, as fractions of the largest |input| of the fitting runs; the best is
+/// refined between its neighbours by [`GRID_REFINE`] golden-section steps.
+pub const DEADBAND_GRID: [f64; 8] = [0.005, 0.01, 0.02, 0.04, 0.08, 0.15, 0.3, 0.5];
+/// Saturation levels tried: these quantiles of |input| over the fitting runs' moving samples
+/// (levels at or above the largest |input| clip nothing and are dropped); the best is refined
+/// between its neighbours by [`GRID_REFINE`] golden-section steps.
+pub const SATURATION_QUANTILES: [f64; 11] =
+    [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 0.99];
+/// Load shares `mu` tried for load-dependent friction (every dry level plus `mu |F|`): from
+/// a fine screw or gear (a few %) to a worm gear near self-locking.
+pub const LOAD_GRID: [f64; 8] = [0.01, 0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.8];
+/// Golden-section steps refining the best dead band, saturation or load-share grid value (on the
+/// fitting runs): the bracket shrinks to 0.618^8, under 2 % of the grid step.
+pub const GRID_REFINE: usize = 10;
+
+/// What [`try_cause`] fits and scores with.
+pub(super) struct Search<'a> {
+    /// The runs, and how a structure is fitted and scored on them.
+    pub ex: &'a Experiment<'a>,
+    /// Largest |input| of the fitting runs.
+    pub umax: f64,
+    /// Saturation levels tried ([`saturation_grid`]).
+    pub sat_grid: &'a [f64],
+    /// Delays tried [samples] ([`super::grid::delay_grid`]), ascending.
+    pub delay_grid: &'a [usize],
+    /// The fitting runs' sample period [s] (the shortest, if they differ).
+    pub dt: f64,
+    /// The peak of a model's binned sliding residual ([`super::local::guess`]).
+    pub bump_guess: &'a dyn Fn(&Estimate) -> Option<BumpSite>,
+}
+
+/// The saturation levels tried: [`SATURATION_QUANTILES`] of |input| over the fitting runs'
+/// samples moving faster than the motion threshold, ascending, distinct, above 0 and below
+/// `umax` (a level at or above the largest |input| clips nothing).
+pub(super) fn saturation_grid(fit: &[&Prepared], th: &Thresholds, umax: f64) -> Vec<f64> {
+    let mut a: Vec<f64> = fit
+        .iter()
+        .flat_map(|p| {
+            p.run
+                .u
+                .iter()
+                .zip(&p.v)
+                .filter(|(_, v)| v.abs() > th.v_move)
+                .map(|(u, _)| u.abs())
+        })
+        .filter(|u| u.is_finite())
+        .collect();
+    if a.is_empty() {
+        return Vec::new();
+    }
+    a.sort_by(f64::total_cmp);
+    let mut grid: Vec<f64> = SATURATION_QUANTILES
+        .iter()
+        .map(|q| a[((q * (a.len() - 1) as f64).round() as usize).min(a.len() - 1)])
+        .filter(|&l| l > 0.0 && l < umax)
+        .collect();
+    grid.dedup();
+    grid
+}
+
+/// Fits and scores the current structure plus one cause; for grid-searched causes the best
+/// grid point, with a note when it lies at the grid's edge.
+pub(super) fn try_cause(
+    cause: Cause,
+    current: &Scored,
+    search: &Search<'_>,
+) -> Option<(Scored, Option<String>)> {
+    let (ex, umax) = (search.ex, search.umax);
+    let s = current.est.structure;
+    let one = |s: Structure| ex.fit_and_score(s).ok().map(|r| (r, None));
+    // a structure fitted on the fitting runs, with its simulated error there (the measure
+    // every grid-searched value is chosen by)
+    let fitted = |st: Structure| -> Option<(Estimate, f64)> {
+        let est = ex.fit_only(st).ok()?;
+        let e = ex.fit_error(&est);
+        Some((est, e))
+    };
+    match cause {
+        Cause::RestoringForce if !s.restoring => one(Structure {
+            restoring: true,
+            ..s
+        }),
+        Cause::Stiction if !s.stiction => one(Structure {
+            stiction: true,
+            ..s
+        }),
+        Cause::DirectionAsymmetry if !s.asymmetric => one(Structure {
+            asymmetric: true,
+            ..s
+        }),
+        Cause::ForceOffset if !s.offset => one(Structure { offset: true, ..s }),
+        Cause::InputDeadzone if s.deadband == 0.0 && umax > 0.0 => {
+            // the value is chosen on the fitting runs: the held-out runs then score an
+            // honestly chosen value (choosing on them would select on the test set)
+            let grid: Vec<f64> = DEADBAND_GRID.iter().map(|f| f * umax).collect();
+            let b = super::grid::continuous(&grid, GRID_REFINE, |d| {
+                fitted(Structure { deadband: d, ..s })
+            })?;
+            let edge = b.at_edge(&grid, true).then(|| {
+                format!(
+                    "dead band at the {} value tried ({:.4}, {} of the largest |input|; grid edge)",
+                    if b.at == grid[0] {
+                        "smallest"
+                    } else {
+                        "largest"
+                    },
+                    b.at,
+                    if b.at == grid[0] {
+                        DEADBAND_GRID[0]
+                    } else {
+                        DEADBAND_GRID[DEADBAND_GRID.len() - 1]
+                    }
+                )
+            });
+            ex.score(b.value).ok().map(|r| (r, edge))
+        }
+        Cause::InputSaturation if s.saturation == 0.0 && !search.sat_grid.is_empty() => {
+            // levels chosen on the fitting runs, like the dead band's: the grid over quantiles
+            // of |u| while moving, refined between the best level's neighbours; only the
+            // chosen model is scored on the held-out runs
+            let grid = search.sat_grid;
+            let b = super::grid::continuous(grid, GRID_REFINE, |level| {
+                fitted(Structure {
+                    saturation: level,
+                    ..s
+                })
+            })?;
+            let edge = b.at_edge(grid, true).then(|| {
+                format!(
+                    "saturation level at the {} level tried ({:.4}, the {} quantile of |input| while moving; grid edge)",
+                    if b.at == grid[0] { "lowest" } else { "highest" },
+                    b.at,
+                    if b.at == grid[0] { SATURATION_QUANTILES[0] } else { SATURATION_QUANTILES[SATURATION_QUANTILES.len() - 1] }
+                )
+            });
+            ex.score(b.value).ok().map(|r| (r, edge))
+        }
+        Cause::LoadDependentFriction if s.load == 0.0 => {
+            // chosen on the fitting runs' simulation, like the dead band: a least squares of
+            // `mu` against the effort it multiplies trades it for the inertia and gain
+            let b = super::grid::continuous(&LOAD_GRID, GRID_REFINE, |mu| {
+                fitted(Structure { load: mu, ..s })
+            })?;
+            let edge = b.at_edge(&LOAD_GRID, true).then(|| {
+                format!(
+                    "load share mu at the {} value tried ({:.4}; grid edge)",
+                    if b.at == LOAD_GRID[0] {
+                        "smallest"
+                    } else {
+                        "largest"
+                    },
+                    b.at
+                )
+            });
+            ex.score(b.value).ok().map(|r| (r, edge))
+        }
+        Cause::LocalizedFriction if s.bump.is_none() => {
+            // the sites around the peak of the binned sliding residual, each with its
+            // amplitude by least squares, chosen by the fitting runs' simulation
+            let g = (search.bump_guess)(&current.est)?;
+            let best = super::local::sites(g)
+                .into_iter()
+                .filter_map(|site| {
+                    fitted(Structure {
+                        bump: Some(site),
+                        ..s
+                    })
+                    .filter(|(_, e)| e.is_finite())
+                })
+                .min_by(|a, b| a.1.total_cmp(&b.1))?;
+            ex.score(best.0).ok().map(|r| (r, None))
+        }
+        Cause::InputDelay if s.delay == 0 && !search.delay_grid.is_empty() => {
+            let grid = search.delay_grid;
+            let b = super::grid::integer(grid, |d| fitted(Structure { delay: d, ..s }))?;
+            let edge = b.at_edge(grid, false).then(|| {
+                format!(
+                    "delay at the largest value tried ({} samples, {:.4} s; grid edge)",
+                    b.at,
+                    b.at as f64 * search.dt
+                )
+            });
+            ex.score(b.value).ok().map(|r| (r, edge))
+        }
+        _ => None,
+    }
+}
