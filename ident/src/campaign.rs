@@ -219,7 +219,6 @@ pub fn run_campaign(
         })?;
     }
     let dt = rig.sample_time();
-    let n_of = |s: f64| (s / dt).round() as usize;
     let mut rng = Rng::new(c.seed);
     let mut rec = Recorder {
         out,
@@ -231,6 +230,42 @@ pub fn run_campaign(
     spec.breakaway_noise_var = c.noise_var;
 
     // 1. Rope: quasistatic ramps (no payload).
+    rope_ramps(rig, c, &mut rec)?;
+    // 2. Rope motion unloaded and loaded: multi-step then chirp.
+    rope_motion(rig, c, dt, &mut rng, &mut rec)?;
+    // 3. Rope estimates give the gains that turn breakaway voltages into forces.
+    let rope = identify_rope(&rec.dataset(&spec), &c.ident)?;
+    // 4. Breakaway probes, by active learning (or a uniform grid).
+    let probes = breakaway_probes(rig, c, constants, rope.gain.value, &mut rng, &mut rec)?;
+    // 5. X and Y motion: multi-step and chirp 0.1-2.5 Hz, no payload.
+    axis_motion(rig, c, dt, &mut rng, &mut rec)?;
+    // 6. Free swings.
+    free_swings(rig, c, constants, dt, &mut rec)?;
+    // 7. Validation multisine (open loop).
+    validation(rig, c, dt, &mut rec)?;
+
+    let dataset = rec.dataset(&spec);
+    if let Some(dir) = out {
+        write_spec(dir, &dataset.spec).map_err(|e| CampaignError::Io {
+            path: dir.join(crate::data::DATASET_FILE),
+            error: e.to_string(),
+        })?;
+    }
+    Ok(CampaignResult { dataset, probes })
+}
+
+/// Samples in `secs` seconds at sample time `dt` [s] (rounded to the nearest).
+fn samples(secs: f64, dt: f64) -> usize {
+    (secs / dt).round() as usize
+}
+
+/// Stage 1: `c.rope_ramps` quasistatic rope ramps per direction from `HOME`, no payload
+/// (lowering first, then hoisting).
+fn rope_ramps(
+    rig: &mut dyn Rig,
+    c: &Campaign,
+    rec: &mut Recorder<'_>,
+) -> Result<(), CampaignError> {
     for i in 0..c.rope_ramps {
         for positive in [true, false] {
             let probe = Probe::new(AXIS_L, positive, HOME[2]);
@@ -244,19 +279,33 @@ pub fn run_campaign(
             )?;
         }
     }
-    // 2. Rope motion unloaded and loaded: multi-step then chirp.
-    let rope_motion = |rng: &mut Rng, secs: f64| {
-        signals::concat(&[
-            signals::multistep(rng, n_of(secs), dt, AXIS_L, (2.0, 7.0), (0.3, 1.5)),
-            signals::chirp(n_of(secs), dt, AXIS_L, 0.1, 2.5, 6.0),
-        ])
-    };
+    Ok(())
+}
+
+/// The rope's excitation of `secs` seconds at sample time `dt` [s]: a multi-step then a chirp
+/// of the same length (draws the steps from `rng`).
+fn rope_signal(rng: &mut Rng, secs: f64, dt: f64) -> Vec<[f64; 3]> {
+    signals::concat(&[
+        signals::multistep(rng, samples(secs, dt), dt, AXIS_L, (2.0, 7.0), (0.3, 1.5)),
+        signals::chirp(samples(secs, dt), dt, AXIS_L, 0.1, 2.5, 6.0),
+    ])
+}
+
+/// Stage 2: rope motion unloaded (`c.motion_s` of each signal), then with each of
+/// `c.loaded_payloads` (half as long).
+fn rope_motion(
+    rig: &mut dyn Rig,
+    c: &Campaign,
+    dt: f64,
+    rng: &mut Rng,
+    rec: &mut Recorder<'_>,
+) -> Result<(), CampaignError> {
     let exp = Experiment {
         name: "rope_unloaded".into(),
         kind: RunKind::RopeUnloaded,
         payload_kg: 0.0,
         init: HOME,
-        input: centred(rope_motion(&mut rng, c.motion_s), AXIS_L),
+        input: centred(rope_signal(rng, c.motion_s, dt), AXIS_L),
     };
     let run = rig.run(&exp)?;
     rec.add(&exp.name, exp.kind, 0.0, run)?;
@@ -266,18 +315,29 @@ pub fn run_campaign(
             kind: RunKind::RopeLoaded,
             payload_kg: m,
             init: HOME,
-            input: centred(rope_motion(&mut rng, 0.5 * c.motion_s), AXIS_L),
+            input: centred(rope_signal(rng, 0.5 * c.motion_s, dt), AXIS_L),
         };
         let run = rig.run(&exp)?;
         rec.add(&exp.name, exp.kind, m, run)?;
     }
-    // 3. Rope estimates give the gains that turn breakaway voltages into forces.
-    let rope = identify_rope(&rec.dataset(&spec), &c.ident)?;
+    Ok(())
+}
+
+/// Stage 4: breakaway probes on X then Y, each in the positive then the negative direction.
+/// `rope_gain` [N/V] is the rope's identified gain; times the ratio of the pulley radii it
+/// turns an axis's breakaway voltage into a force. Returns one summary per axis and direction.
+fn breakaway_probes(
+    rig: &mut dyn Rig,
+    c: &Campaign,
+    constants: &Constants,
+    rope_gain: f64,
+    rng: &mut Rng,
+    rec: &mut Recorder<'_>,
+) -> Result<Vec<ProbeSummary>, CampaignError> {
     let ratios = [
         constants.pulley_radius_l_m / constants.pulley_radius_x_m,
         constants.pulley_radius_l_m / constants.pulley_radius_y_m,
     ];
-    // 4. Breakaway probes, by active learning (or a uniform grid).
     let mut probes = Vec::new();
     for axis in [AXIS_X, AXIS_Y] {
         let range = if axis == AXIS_X {
@@ -285,51 +345,10 @@ pub fn run_campaign(
         } else {
             constants.y_range_m
         };
-        let gain = rope.gain.value * ratios[axis];
+        let gain = rope_gain * ratios[axis];
         for positive in [true, false] {
-            let var = match (axis, positive) {
-                (AXIS_X, true) => c.noise_var.x_pos,
-                (AXIS_X, false) => c.noise_var.x_neg,
-                (_, true) => c.noise_var.y_pos,
-                (_, false) => c.noise_var.y_neg,
-            };
-            let mut blr = Blr::new(range[0], range[1], c.blr.degree, c.blr.prior_std, var);
-            let mut records = Vec::new();
-            let mut measure = |p: f64| -> Result<(f64, f64), CampaignError> {
-                let probe = Probe::new(axis, positive, p);
-                let r = rig.breakaway(&probe)?;
-                let onset = r.onset.ok_or(CampaignError::NoMotion {
-                    axis,
-                    position: p,
-                    dir: if positive { "+" } else { "-" },
-                    max_v: probe.max_v,
-                })?;
-                records.push(r.run);
-                Ok((gain * onset.volts.abs(), onset.position))
-            };
-            let stop = if c.active_learning {
-                active_learning(&mut blr, &c.blr, &mut rng, &mut measure)?
-            } else {
-                for p in linspace(
-                    range[0] + c.blr.margin,
-                    range[1] - c.blr.margin,
-                    c.blr.budget,
-                ) {
-                    let (f, at) = measure(p)?;
-                    blr.add(at, f);
-                }
-                StopReason::Budget
-            };
-            let grid = linspace(range[0], range[1], 201);
-            let names = (["x", "y"][axis], if positive { "+" } else { "-" });
-            probes.push(ProbeSummary {
-                axis: names.0.into(),
-                direction: names.1.into(),
-                positions: blr.xs.clone(),
-                forces: blr.ys.clone(),
-                stop,
-                max_std: blr.max_std(&grid),
-            });
+            let (summary, records) = probe_direction(rig, c, rng, axis, positive, range, gain)?;
+            probes.push(summary);
             let kind = if axis == AXIS_X {
                 RunKind::BreakawayX
             } else {
@@ -338,7 +357,7 @@ pub fn run_campaign(
             for (i, run) in records.into_iter().enumerate() {
                 let dir = if positive { "pos" } else { "neg" };
                 rec.add(
-                    &format!("breakaway_{}_{dir}_{i:02}", names.0),
+                    &format!("breakaway_{}_{dir}_{i:02}", ["x", "y"][axis]),
                     kind,
                     0.0,
                     run,
@@ -346,7 +365,77 @@ pub fn run_campaign(
             }
         }
     }
-    // 5. X and Y motion: multi-step and chirp 0.1-2.5 Hz, no payload.
+    Ok(probes)
+}
+
+/// Probes the breakaway force of `axis` in one direction (`positive`: increasing position)
+/// over its travel `range` [m], by active learning or (without it) a uniform grid; `gain`
+/// [N/V] turns the breakaway voltage into a force. Returns the summary and the ramps' runs
+/// in probing order.
+fn probe_direction(
+    rig: &mut dyn Rig,
+    c: &Campaign,
+    rng: &mut Rng,
+    axis: usize,
+    positive: bool,
+    range: [f64; 2],
+    gain: f64,
+) -> Result<(ProbeSummary, Vec<CraneRun>), CampaignError> {
+    let var = match (axis, positive) {
+        (AXIS_X, true) => c.noise_var.x_pos,
+        (AXIS_X, false) => c.noise_var.x_neg,
+        (_, true) => c.noise_var.y_pos,
+        (_, false) => c.noise_var.y_neg,
+    };
+    let mut blr = Blr::new(range[0], range[1], c.blr.degree, c.blr.prior_std, var);
+    let mut records = Vec::new();
+    let mut measure = |p: f64| -> Result<(f64, f64), CampaignError> {
+        let probe = Probe::new(axis, positive, p);
+        let r = rig.breakaway(&probe)?;
+        let onset = r.onset.ok_or(CampaignError::NoMotion {
+            axis,
+            position: p,
+            dir: if positive { "+" } else { "-" },
+            max_v: probe.max_v,
+        })?;
+        records.push(r.run);
+        Ok((gain * onset.volts.abs(), onset.position))
+    };
+    let stop = if c.active_learning {
+        active_learning(&mut blr, &c.blr, rng, &mut measure)?
+    } else {
+        for p in linspace(
+            range[0] + c.blr.margin,
+            range[1] - c.blr.margin,
+            c.blr.budget,
+        ) {
+            let (f, at) = measure(p)?;
+            blr.add(at, f);
+        }
+        StopReason::Budget
+    };
+    let grid = linspace(range[0], range[1], 201);
+    let names = (["x", "y"][axis], if positive { "+" } else { "-" });
+    let summary = ProbeSummary {
+        axis: names.0.into(),
+        direction: names.1.into(),
+        positions: blr.xs.clone(),
+        forces: blr.ys.clone(),
+        stop,
+        max_std: blr.max_std(&grid),
+    };
+    Ok((summary, records))
+}
+
+/// Stage 5: X then Y motion, no payload: a multi-step then a chirp of 0.1-2.5 Hz,
+/// `c.motion_s` each.
+fn axis_motion(
+    rig: &mut dyn Rig,
+    c: &Campaign,
+    dt: f64,
+    rng: &mut Rng,
+    rec: &mut Recorder<'_>,
+) -> Result<(), CampaignError> {
     for axis in [AXIS_X, AXIS_Y] {
         let name = ["x", "y"][axis];
         let kind = if axis == AXIS_X {
@@ -354,9 +443,15 @@ pub fn run_campaign(
         } else {
             RunKind::MotionY
         };
-        let steps =
-            signals::multistep(&mut rng, n_of(c.motion_s), dt, axis, (1.5, 6.0), (0.3, 1.5));
-        let chirp = signals::chirp(n_of(c.motion_s), dt, axis, 0.1, 2.5, 5.0);
+        let steps = signals::multistep(
+            rng,
+            samples(c.motion_s, dt),
+            dt,
+            axis,
+            (1.5, 6.0),
+            (0.3, 1.5),
+        );
+        let chirp = signals::chirp(samples(c.motion_s, dt), dt, axis, 0.1, 2.5, 5.0);
         for (what, sig) in [("multistep", steps), ("chirp", chirp)] {
             let exp = Experiment {
                 name: format!("{name}_{what}"),
@@ -369,13 +464,23 @@ pub fn run_campaign(
             rec.add(&exp.name, kind, 0.0, run)?;
         }
     }
-    // 6. Free swings: the trolley pumps the pendulum at its frequency for two periods and
-    //    stops; the swing is then recorded with the drives at rest.
+    Ok(())
+}
+
+/// Stage 6: three free swings. The trolley pumps the pendulum at its frequency for two
+/// periods and stops; the swing is then recorded with the drives at rest for `c.swing_s`.
+fn free_swings(
+    rig: &mut dyn Rig,
+    c: &Campaign,
+    constants: &Constants,
+    dt: f64,
+    rec: &mut Recorder<'_>,
+) -> Result<(), CampaignError> {
     let l = c.swing_length_m;
     let w = (constants.gravity / l).sqrt();
     let pump = (2.0 * 2.0 * core::f64::consts::PI / w / dt).round() as usize;
     for (i, amps) in [[0.0, 2.5], [2.5, 0.0], [2.0, 2.0]].iter().enumerate() {
-        let n = pump + n_of(c.swing_s);
+        let n = pump + samples(c.swing_s, dt);
         let sig: Vec<[f64; 3]> = (0..n)
             .map(|k| {
                 if k < pump {
@@ -398,14 +503,23 @@ pub fn run_campaign(
         let run = rig.run(&exp)?;
         rec.add(&exp.name, exp.kind, c.swing_payload_kg, run)?;
     }
-    // 7. Validation multisine (open loop).
+    Ok(())
+}
+
+/// Stage 7: the validation multisine (open loop), `c.validation_s` long.
+fn validation(
+    rig: &mut dyn Rig,
+    c: &Campaign,
+    dt: f64,
+    rec: &mut Recorder<'_>,
+) -> Result<(), CampaignError> {
     let exp = Experiment {
         name: "validation_multisine".into(),
         kind: RunKind::Validation,
         payload_kg: c.validation_payload_kg,
         init: HOME,
         input: Input::Open(signals::multisine(
-            n_of(c.validation_s),
+            samples(c.validation_s, dt),
             dt,
             &VALIDATION_FREQS,
             &VALIDATION_AMPS,
@@ -413,15 +527,7 @@ pub fn run_campaign(
     };
     let run = rig.run(&exp)?;
     rec.add(&exp.name, exp.kind, c.validation_payload_kg, run)?;
-
-    let dataset = rec.dataset(&spec);
-    if let Some(dir) = out {
-        write_spec(dir, &dataset.spec).map_err(|e| CampaignError::Io {
-            path: dir.join(crate::data::DATASET_FILE),
-            error: e.to_string(),
-        })?;
-    }
-    Ok(CampaignResult { dataset, probes })
+    Ok(())
 }
 
 /// Everything `crane rig` needs: the plant's true parameters, how the rig measures, and

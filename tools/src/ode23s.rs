@@ -91,6 +91,29 @@ impl<const N: usize> Lu<N> {
     }
 }
 
+/// `d = 1/(2 + sqrt 2)` of the method.
+const D: f64 = 1.0 / (2.0 + SQRT2);
+/// `e32 = 6 + sqrt 2` of the method.
+const E32: f64 = 6.0 + SQRT2;
+
+/// The solution at the start of a step: time `t`, state `y` and its derivative `f0 = f(t, y)`.
+#[derive(Clone, Copy)]
+struct Point<const N: usize> {
+    t: f64,
+    y: [f64; N],
+    f0: [f64; N],
+}
+
+/// The results of one step's three stages: `k1`, `k2`, the new state `yn`, its derivative
+/// `f2 = f(t + h, yn)` and the error estimate `e = h/6 (k1 - 2 k2 + k3)`.
+struct Stages<const N: usize> {
+    k1: [f64; N],
+    k2: [f64; N],
+    yn: [f64; N],
+    f2: [f64; N],
+    e: [f64; N],
+}
+
 /// Integrates `y' = f(t, y)` from `t0` to `t0 + n dt`, calling `out(k, t_k, y(t_k))` for every
 /// grid time `t_k = t0 + k dt`, `k = 1..=n` (dense output). `f` returns `None` when it cannot
 /// be evaluated. `Stats::evals` counts every evaluation (the Jacobian's included).
@@ -103,112 +126,48 @@ pub fn integrate<const N: usize>(
     opts: &Options,
     mut out: impl FnMut(usize, f64, &[f64; N]),
 ) -> Result<Stats, Failure> {
-    let d = 1.0 / (2.0 + SQRT2);
-    let e32 = 6.0 + SQRT2;
     let t_end = t0 + n as f64 * dt;
     let mut st = Stats::default();
-    let mut t = t0;
-    let mut y = y0;
-    let mut f0 = f(t, &y).ok_or(Failure::Rhs(t))?;
+    let mut p = Point {
+        t: t0,
+        y: y0,
+        f0: f(t0, &y0).ok_or(Failure::Rhs(t0))?,
+    };
     st.evals += 1;
     let hmax = opts.hmax.min((t_end - t0).abs()).max(f64::MIN_POSITIVE);
-    // Initial step as MATLAB's ode23s: from the size of y' relative to the tolerance.
-    let mut h = {
-        let mut r = 0.0f64;
-        for j in 0..N {
-            let sc = opts.atol + opts.rtol * y[j].abs();
-            r = r.max(f0[j].abs() / sc);
-        }
-        let h = if r > 0.0 {
-            0.8 * opts.rtol.powf(1.0 / 3.0) / r
-        } else {
-            hmax
-        };
-        h.min(hmax).max(16.0 * f64::EPSILON * t0.abs().max(1.0))
-    };
+    let mut h = initial_step(&p, hmax, opts);
     let mut next = 1usize;
     let mut rejected_last = false;
     let mut jac: Option<([[f64; N]; N], [f64; N])> = None;
     while next <= n {
-        let remaining = t_end - t;
+        let remaining = t_end - p.t;
         if h >= remaining {
             h = remaining;
         }
-        if h <= 16.0 * f64::EPSILON * t.abs().max(1.0) {
-            return Err(Failure::StepTooSmall(t));
+        if h <= 16.0 * f64::EPSILON * p.t.abs().max(1.0) {
+            return Err(Failure::StepTooSmall(p.t));
         }
         // Jacobian and time derivative by forward differences (once per step, kept over
         // rejections at the same point).
         let (jm, tv) = match jac {
             Some(j) => j,
             None => {
-                let mut jm = [[0.0; N]; N];
-                for c in 0..N {
-                    let del = f64::EPSILON.sqrt() * y[c].abs().max(1e-5);
-                    let mut yp = y;
-                    yp[c] += del;
-                    let del = yp[c] - y[c];
-                    let fp = f(t, &yp).ok_or(Failure::Rhs(t))?;
-                    for r in 0..N {
-                        jm[r][c] = (fp[r] - f0[r]) / del;
-                    }
-                }
-                let dtt = f64::EPSILON.sqrt() * t.abs().max(1e-3);
-                let ft = f(t + dtt, &y).ok_or(Failure::Rhs(t))?;
-                let mut tv = [0.0; N];
-                for r in 0..N {
-                    tv[r] = (ft[r] - f0[r]) / dtt;
-                }
+                let j = jacobian(&mut f, &p)?;
                 st.evals += N as u64 + 1;
-                jac = Some((jm, tv));
-                (jm, tv)
+                jac = Some(j);
+                j
             }
         };
-        let mut w = [[0.0; N]; N];
-        for r in 0..N {
-            for c in 0..N {
-                w[r][c] = if r == c { 1.0 } else { 0.0 } - h * d * jm[r][c];
-            }
-        }
-        let Some(lu) = Lu::new(w) else {
+        let Some(lu) = Lu::new(iteration_matrix(&jm, h)) else {
             st.rejected += 1;
             h *= 0.5;
             rejected_last = true;
             continue;
         };
-        let mut b = [0.0; N];
-        for r in 0..N {
-            b[r] = f0[r] + h * d * tv[r];
-        }
-        let k1 = lu.solve(&b);
-        let mut y1 = y;
-        for r in 0..N {
-            y1[r] += 0.5 * h * k1[r];
-        }
-        let f1 = f(t + 0.5 * h, &y1).ok_or(Failure::Rhs(t))?;
-        for r in 0..N {
-            b[r] = f1[r] - k1[r];
-        }
-        let mut k2 = lu.solve(&b);
-        for r in 0..N {
-            k2[r] += k1[r];
-        }
-        let mut yn = y;
-        for r in 0..N {
-            yn[r] += h * k2[r];
-        }
-        let t_new = if h == remaining { t_end } else { t + h };
-        let f2 = f(t_new, &yn).ok_or(Failure::Rhs(t))?;
+        let t_new = if h == remaining { t_end } else { p.t + h };
+        let Stages { k1, k2, yn, f2, e } = stages(&mut f, &lu, &p, &tv, h, t_new)?;
         st.evals += 2;
-        for r in 0..N {
-            b[r] = f2[r] - e32 * (k2[r] - f1[r]) - 2.0 * (k1[r] - f0[r]) + h * d * tv[r];
-        }
-        let k3 = lu.solve(&b);
-        let mut e = [0.0; N];
-        for r in 0..N {
-            e[r] = h / 6.0 * (k1[r] - 2.0 * k2[r] + k3[r]);
-        }
-        let err = rms_norm(&e, &y, &yn, opts);
+        let err = rms_norm(&e, &p.y, &yn, opts);
         let accept = err <= 1.0 && yn.iter().all(|v| v.is_finite()); // false for NaN too
         if !accept {
             st.rejected += 1;
@@ -222,24 +181,27 @@ pub fn integrate<const N: usize>(
             continue;
         }
         st.accepted += 1;
+        // Dense output (MATLAB's `ntrp23s`) at every grid time inside the step.
         while next <= n {
             let tk = t0 + next as f64 * dt;
             if tk > t_new {
                 break;
             }
-            let s = ((tk - t) / h).clamp(0.0, 1.0);
-            let a1 = s * (1.0 - s) / (1.0 - 2.0 * d);
-            let a2 = s * (s - 2.0 * d) / (1.0 - 2.0 * d);
-            let mut yk = y;
+            let s = ((tk - p.t) / h).clamp(0.0, 1.0);
+            let a1 = s * (1.0 - s) / (1.0 - 2.0 * D);
+            let a2 = s * (s - 2.0 * D) / (1.0 - 2.0 * D);
+            let mut yk = p.y;
             for r in 0..N {
                 yk[r] += h * (a1 * k1[r] + a2 * k2[r]);
             }
             out(next, tk, &yk);
             next += 1;
         }
-        t = t_new;
-        y = yn;
-        f0 = f2;
+        p = Point {
+            t: t_new,
+            y: yn,
+            f0: f2,
+        };
         jac = None;
         let fac = if err == 0.0 {
             5.0
@@ -250,6 +212,103 @@ pub fn integrate<const N: usize>(
         rejected_last = false;
     }
     Ok(st)
+}
+
+/// Initial step [s] as MATLAB's ode23s: from the size of `y'` relative to the tolerance, at
+/// most `hmax`, at least 16 ulps of the start time.
+fn initial_step<const N: usize>(p: &Point<N>, hmax: f64, opts: &Options) -> f64 {
+    let mut r = 0.0f64;
+    for j in 0..N {
+        let sc = opts.atol + opts.rtol * p.y[j].abs();
+        r = r.max(p.f0[j].abs() / sc);
+    }
+    let h = if r > 0.0 {
+        0.8 * opts.rtol.powf(1.0 / 3.0) / r
+    } else {
+        hmax
+    };
+    h.min(hmax).max(16.0 * f64::EPSILON * p.t.abs().max(1.0))
+}
+
+/// `J = df/dy` and `T = df/dt` at `p` by forward differences (`N + 1` evaluations).
+fn jacobian<const N: usize>(
+    f: &mut impl FnMut(f64, &[f64; N]) -> Option<[f64; N]>,
+    p: &Point<N>,
+) -> Result<([[f64; N]; N], [f64; N]), Failure> {
+    let (t, y, f0) = (p.t, p.y, p.f0);
+    let mut jm = [[0.0; N]; N];
+    for c in 0..N {
+        let del = f64::EPSILON.sqrt() * y[c].abs().max(1e-5);
+        let mut yp = y;
+        yp[c] += del;
+        let del = yp[c] - y[c];
+        let fp = f(t, &yp).ok_or(Failure::Rhs(t))?;
+        for r in 0..N {
+            jm[r][c] = (fp[r] - f0[r]) / del;
+        }
+    }
+    let dtt = f64::EPSILON.sqrt() * t.abs().max(1e-3);
+    let ft = f(t + dtt, &y).ok_or(Failure::Rhs(t))?;
+    let mut tv = [0.0; N];
+    for r in 0..N {
+        tv[r] = (ft[r] - f0[r]) / dtt;
+    }
+    Ok((jm, tv))
+}
+
+/// `W = I - h d J`.
+fn iteration_matrix<const N: usize>(jm: &[[f64; N]; N], h: f64) -> [[f64; N]; N] {
+    let mut w = [[0.0; N]; N];
+    for r in 0..N {
+        for c in 0..N {
+            w[r][c] = if r == c { 1.0 } else { 0.0 } - h * D * jm[r][c];
+        }
+    }
+    w
+}
+
+/// The three stages of a step of length `h` from `p` to `t_new` (`t + h`, or exactly the
+/// end time on the last step) with `lu` = LU of `W` and `tv` = `T` (2 evaluations).
+fn stages<const N: usize>(
+    f: &mut impl FnMut(f64, &[f64; N]) -> Option<[f64; N]>,
+    lu: &Lu<N>,
+    p: &Point<N>,
+    tv: &[f64; N],
+    h: f64,
+    t_new: f64,
+) -> Result<Stages<N>, Failure> {
+    let (t, y, f0) = (p.t, p.y, p.f0);
+    let mut b = [0.0; N];
+    for r in 0..N {
+        b[r] = f0[r] + h * D * tv[r];
+    }
+    let k1 = lu.solve(&b);
+    let mut y1 = y;
+    for r in 0..N {
+        y1[r] += 0.5 * h * k1[r];
+    }
+    let f1 = f(t + 0.5 * h, &y1).ok_or(Failure::Rhs(t))?;
+    for r in 0..N {
+        b[r] = f1[r] - k1[r];
+    }
+    let mut k2 = lu.solve(&b);
+    for r in 0..N {
+        k2[r] += k1[r];
+    }
+    let mut yn = y;
+    for r in 0..N {
+        yn[r] += h * k2[r];
+    }
+    let f2 = f(t_new, &yn).ok_or(Failure::Rhs(t))?;
+    for r in 0..N {
+        b[r] = f2[r] - E32 * (k2[r] - f1[r]) - 2.0 * (k1[r] - f0[r]) + h * D * tv[r];
+    }
+    let k3 = lu.solve(&b);
+    let mut e = [0.0; N];
+    for r in 0..N {
+        e[r] = h / 6.0 * (k1[r] - 2.0 * k2[r] + k3[r]);
+    }
+    Ok(Stages { k1, k2, yn, f2, e })
 }
 
 #[cfg(test)]

@@ -324,168 +324,29 @@ pub fn run_case(
     o: &Options,
     mut progress: impl FnMut(&str),
 ) -> Result<(CaseReport, CaseData)> {
-    progress(&format!(
-        "{}: reference (h = {} s)",
-        case.name,
-        o.h / o.ref_div as f64
-    ));
-    let t0 = Instant::now();
-    let refr = reference::reference(case, o.h, o.ref_div)?;
-    let reference_time_s = t0.elapsed().as_secs_f64();
-    let convergence = if o.convergence {
-        progress(&format!("{}: reference convergence check", case.name));
-        Some(reference::convergence(case, &refr)?)
-    } else {
-        None
-    };
+    let (refr, reference_time_s, convergence) = reference_stage(case, o, &mut progress)?;
 
     let mut rows = Vec::new();
     progress(&format!("{}: hybrid", case.name));
-    let (pt, pr) = paper(case.id, 0);
-    let t_h = match o.hybrid_rtol {
-        Some(rtol) => {
-            let tol = adaptive_run::tolerances(case, rtol);
-            let (t, (hyb, st)) = time_best(o.timing_budget, || {
-                adaptive_run::hybrid_adaptive(case, &tol)
-            })?;
-            rows.push(Row {
-                model: "hybrid".into(),
-                law: "hybrid",
-                gamma: None,
-                solver: "hybrid DP45 + events",
-                h: None,
-                time_s: t,
-                rmse: reference::rmse(case, &hyb, &refr),
-                steps: st.accepted,
-                evals: Some(st.evals),
-                rejected: Some(st.rejected),
-                events: Some(st.events),
-                paper_time_s: Some(pt),
-                paper_rmse: Some(pr),
-            });
-            t
-        }
-        None => {
-            let (t, hyb) = time_best(o.timing_budget, || reference::hybrid(case, o.h, false))?;
-            rows.push(Row {
-                model: "hybrid".into(),
-                law: "hybrid",
-                gamma: None,
-                solver: "hybrid RK4 + events",
-                h: Some(o.h),
-                time_s: t,
-                rmse: reference::rmse(case, &hyb, &refr),
-                steps: hyb.steps,
-                evals: None,
-                rejected: None,
-                events: Some(hyb.events),
-                paper_time_s: Some(pt),
-                paper_rmse: Some(pr),
-            });
-            t
-        }
-    };
+    let hybrid = hybrid_row(case, o, &refr)?;
+    let t_h = hybrid.time_s;
+    rows.push(hybrid);
 
-    let mut tanh = Vec::new();
-    let mut ode_rows = Vec::new();
-    for &g in &o.gammas {
-        progress(&format!("{}: {} (ode45)", case.name, tanh_name(g)));
-        let (t, (tr, st)) = time_best(o.timing_budget, || tanh_ode45(case, g, &o.ode))?;
-        let p = gamma_index(g).map(|k| paper(case.id, k));
-        let row = Row {
-            model: tanh_name(g),
-            law: "tanh",
-            gamma: Some(g),
-            solver: "ode45",
-            h: None,
-            time_s: t,
-            rmse: reference::rmse(case, &tr, &refr),
-            steps: st.accepted,
-            evals: Some(st.evals),
-            rejected: Some(st.rejected),
-            events: None,
-            paper_time_s: p.map(|p| p.0),
-            paper_rmse: p.map(|p| p.1),
-        };
-        ode_rows.push(row.clone());
-        rows.push(row);
-        tanh.push((g, tr));
-    }
+    let Ode45Runs {
+        rows: ode_rows,
+        tanh,
+    } = ode45_rows(case, o, &refr, &mut progress)?;
+    rows.extend(ode_rows.iter().cloned());
 
     if o.rk4_search {
-        for r in &ode_rows {
-            let g = r.gamma.unwrap_or(1.0);
-            progress(&format!(
-                "{}: {} (RK4 step search)",
-                case.name,
-                tanh_name(g)
-            ));
-            let limit = 1.1 * r.rmse + 1e-9;
-            let mut found = None;
-            for h in rk4_ladder(case.sample) {
-                if let Ok(tr) = tanh_rk4(case, g, h) {
-                    if reference::rmse(case, &tr, &refr) <= limit {
-                        found = Some(h);
-                        break;
-                    }
-                }
-            }
-            if let Some(h) = found {
-                let (t, tr) = time_best(o.timing_budget, || tanh_rk4(case, g, h))?;
-                rows.push(Row {
-                    model: tanh_name(g),
-                    law: "tanh",
-                    gamma: Some(g),
-                    solver: "RK4",
-                    h: Some(h),
-                    time_s: t,
-                    rmse: reference::rmse(case, &tr, &refr),
-                    steps: tr.steps,
-                    evals: Some(4 * tr.steps),
-                    rejected: None,
-                    events: None,
-                    paper_time_s: None,
-                    paper_rmse: None,
-                });
-            }
-        }
+        rows.extend(rk4_rows(case, o, &refr, &ode_rows, &mut progress)?);
     }
 
-    let mut equal_accuracy = Vec::new();
-    if o.equal_accuracy {
-        progress(&format!("{}: hybrid at equal accuracy", case.name));
-        // RMSE of the hybrid model on its ladder (one run each), then timing where needed.
-        let ladder: Vec<(f64, f64)> = hybrid_ladder(case.sample, o.h)
-            .into_iter()
-            .filter_map(|h| {
-                reference::hybrid(case, h, false)
-                    .ok()
-                    .map(|tr| (h, reference::rmse(case, &tr, &refr)))
-            })
-            .collect();
-        for r in &ode_rows {
-            let pick = ladder.iter().find(|(_, e)| *e <= r.rmse).copied();
-            let (hh, ht, hr) = match pick {
-                Some((h, e)) => {
-                    // The full state on the grid inside the timed run, as ode45 delivers it.
-                    let (t, _) = time_best(o.timing_budget, || {
-                        reference::hybrid(case, h, false).map(|tr| tr.on_grid(case))
-                    })?;
-                    (Some(h), Some(t), Some(e))
-                }
-                None => (None, None, None),
-            };
-            equal_accuracy.push(EqualAccuracy {
-                gamma: r.gamma.unwrap_or(f64::NAN),
-                tanh_time_s: r.time_s,
-                tanh_rmse: r.rmse,
-                hybrid_h: hh,
-                hybrid_time_s: ht,
-                hybrid_rmse: hr,
-                speedup: ht.map(|t| r.time_s / t),
-            });
-        }
-    }
+    let equal_accuracy = if o.equal_accuracy {
+        equal_accuracy_rows(case, o, &refr, &ode_rows, &mut progress)?
+    } else {
+        Vec::new()
+    };
 
     let ratio_tanh1000_hybrid = ode_rows
         .iter()
@@ -521,6 +382,214 @@ pub fn run_case(
             tanh,
         },
     ))
+}
+
+/// The reference run (hybrid at `o.h / o.ref_div`), its wall time [s] and, if asked for,
+/// its convergence check.
+fn reference_stage(
+    case: &Case,
+    o: &Options,
+    progress: &mut impl FnMut(&str),
+) -> Result<(Trajectory, f64, Option<Convergence>)> {
+    progress(&format!(
+        "{}: reference (h = {} s)",
+        case.name,
+        o.h / o.ref_div as f64
+    ));
+    let t0 = Instant::now();
+    let refr = reference::reference(case, o.h, o.ref_div)?;
+    let reference_time_s = t0.elapsed().as_secs_f64();
+    let convergence = if o.convergence {
+        progress(&format!("{}: reference convergence check", case.name));
+        Some(reference::convergence(case, &refr)?)
+    } else {
+        None
+    };
+    Ok((refr, reference_time_s, convergence))
+}
+
+/// The hybrid model's row at its default setting (adaptive at `o.hybrid_rtol`, or the fixed
+/// step `o.h`), timed, with its RMSE against `refr`.
+fn hybrid_row(case: &Case, o: &Options, refr: &Trajectory) -> Result<Row> {
+    let (pt, pr) = paper(case.id, 0);
+    Ok(match o.hybrid_rtol {
+        Some(rtol) => {
+            let tol = adaptive_run::tolerances(case, rtol);
+            let (t, (hyb, st)) = time_best(o.timing_budget, || {
+                adaptive_run::hybrid_adaptive(case, &tol)
+            })?;
+            Row {
+                model: "hybrid".into(),
+                law: "hybrid",
+                gamma: None,
+                solver: "hybrid DP45 + events",
+                h: None,
+                time_s: t,
+                rmse: reference::rmse(case, &hyb, refr),
+                steps: st.accepted,
+                evals: Some(st.evals),
+                rejected: Some(st.rejected),
+                events: Some(st.events),
+                paper_time_s: Some(pt),
+                paper_rmse: Some(pr),
+            }
+        }
+        None => {
+            let (t, hyb) = time_best(o.timing_budget, || reference::hybrid(case, o.h, false))?;
+            Row {
+                model: "hybrid".into(),
+                law: "hybrid",
+                gamma: None,
+                solver: "hybrid RK4 + events",
+                h: Some(o.h),
+                time_s: t,
+                rmse: reference::rmse(case, &hyb, refr),
+                steps: hyb.steps,
+                evals: None,
+                rejected: None,
+                events: Some(hyb.events),
+                paper_time_s: Some(pt),
+                paper_rmse: Some(pr),
+            }
+        }
+    })
+}
+
+/// The tanh models by ode45: one row each, and the trajectories with their gammas [s/m].
+struct Ode45Runs {
+    rows: Vec<Row>,
+    tanh: Vec<(f64, Trajectory)>,
+}
+
+/// One row per gamma of `o.gammas`: the tanh model by ode45, timed, with its RMSE against
+/// `refr`; and the trajectories with their gammas.
+fn ode45_rows(
+    case: &Case,
+    o: &Options,
+    refr: &Trajectory,
+    progress: &mut impl FnMut(&str),
+) -> Result<Ode45Runs> {
+    let mut tanh = Vec::new();
+    let mut ode_rows = Vec::new();
+    for &g in &o.gammas {
+        progress(&format!("{}: {} (ode45)", case.name, tanh_name(g)));
+        let (t, (tr, st)) = time_best(o.timing_budget, || tanh_ode45(case, g, &o.ode))?;
+        let p = gamma_index(g).map(|k| paper(case.id, k));
+        ode_rows.push(Row {
+            model: tanh_name(g),
+            law: "tanh",
+            gamma: Some(g),
+            solver: "ode45",
+            h: None,
+            time_s: t,
+            rmse: reference::rmse(case, &tr, refr),
+            steps: st.accepted,
+            evals: Some(st.evals),
+            rejected: Some(st.rejected),
+            events: None,
+            paper_time_s: p.map(|p| p.0),
+            paper_rmse: p.map(|p| p.1),
+        });
+        tanh.push((g, tr));
+    }
+    Ok(Ode45Runs {
+        rows: ode_rows,
+        tanh,
+    })
+}
+
+/// For each tanh model of `ode_rows`: fixed-step RK4 at the largest step of the ladder whose
+/// RMSE is within 10 % (plus 1e-9 m/s) of the ode45 RMSE, timed (no row if no step is).
+fn rk4_rows(
+    case: &Case,
+    o: &Options,
+    refr: &Trajectory,
+    ode_rows: &[Row],
+    progress: &mut impl FnMut(&str),
+) -> Result<Vec<Row>> {
+    let mut rows = Vec::new();
+    for r in ode_rows {
+        let g = r.gamma.unwrap_or(1.0);
+        progress(&format!(
+            "{}: {} (RK4 step search)",
+            case.name,
+            tanh_name(g)
+        ));
+        let limit = 1.1 * r.rmse + 1e-9;
+        let mut found = None;
+        for h in rk4_ladder(case.sample) {
+            if let Ok(tr) = tanh_rk4(case, g, h) {
+                if reference::rmse(case, &tr, refr) <= limit {
+                    found = Some(h);
+                    break;
+                }
+            }
+        }
+        if let Some(h) = found {
+            let (t, tr) = time_best(o.timing_budget, || tanh_rk4(case, g, h))?;
+            rows.push(Row {
+                model: tanh_name(g),
+                law: "tanh",
+                gamma: Some(g),
+                solver: "RK4",
+                h: Some(h),
+                time_s: t,
+                rmse: reference::rmse(case, &tr, refr),
+                steps: tr.steps,
+                evals: Some(4 * tr.steps),
+                rejected: None,
+                events: None,
+                paper_time_s: None,
+                paper_rmse: None,
+            });
+        }
+    }
+    Ok(rows)
+}
+
+/// For each tanh model of `ode_rows`: the largest hybrid step of the ladder at least as
+/// accurate, timed, and the speedup over the tanh model's ode45 time.
+fn equal_accuracy_rows(
+    case: &Case,
+    o: &Options,
+    refr: &Trajectory,
+    ode_rows: &[Row],
+    progress: &mut impl FnMut(&str),
+) -> Result<Vec<EqualAccuracy>> {
+    progress(&format!("{}: hybrid at equal accuracy", case.name));
+    // RMSE of the hybrid model on its ladder (one run each), then timing where needed.
+    let ladder: Vec<(f64, f64)> = hybrid_ladder(case.sample, o.h)
+        .into_iter()
+        .filter_map(|h| {
+            reference::hybrid(case, h, false)
+                .ok()
+                .map(|tr| (h, reference::rmse(case, &tr, refr)))
+        })
+        .collect();
+    let mut equal_accuracy = Vec::new();
+    for r in ode_rows {
+        let pick = ladder.iter().find(|(_, e)| *e <= r.rmse).copied();
+        let (hh, ht, hr) = match pick {
+            Some((h, e)) => {
+                // The full state on the grid inside the timed run, as ode45 delivers it.
+                let (t, _) = time_best(o.timing_budget, || {
+                    reference::hybrid(case, h, false).map(|tr| tr.on_grid(case))
+                })?;
+                (Some(h), Some(t), Some(e))
+            }
+            None => (None, None, None),
+        };
+        equal_accuracy.push(EqualAccuracy {
+            gamma: r.gamma.unwrap_or(f64::NAN),
+            tanh_time_s: r.time_s,
+            tanh_rmse: r.rmse,
+            hybrid_h: hh,
+            hybrid_time_s: ht,
+            hybrid_rmse: hr,
+            speedup: ht.map(|t| r.time_s / t),
+        });
+    }
+    Ok(equal_accuracy)
 }
 
 fn fmt_opt(v: Option<f64>, w: usize) -> String {

@@ -4,27 +4,11 @@
 //! works; `--json` prints exactly one document.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("crane-robust-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("temp dir");
-    d
-}
-
-fn crane(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_crane"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("run crane")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+mod support;
+use support::{crane, stderr, tmp};
 
 /// A directory that looks like a data set (its `dataset.toml` is all the guard looks at).
 fn fake_dataset(dir: &Path) -> PathBuf {

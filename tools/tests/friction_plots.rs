@@ -2,15 +2,11 @@
 //! each a well-formed SVG with the estimate, its bands, the probes and, when the data set
 //! comes from the virtual rig, the truth.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("crane-friction-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("temp dir");
-    d
-}
+mod support;
+use support::tmp;
 
 fn crane(args: &[&str], paths: &[&Path]) {
     let mut c = Command::new(env!("CARGO_BIN_EXE_crane"));

@@ -5,14 +5,9 @@
 
 use crane_tools::monitor::{AlarmKind, Axis, Dir, Report};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("crane-monitor-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("temp dir");
-    d
-}
+mod support;
+use support::{crane, stderr, stdout, tmp};
 
 fn sample() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/monitor_sample.log")
@@ -20,22 +15,6 @@ fn sample() -> PathBuf {
 
 fn sample_text() -> String {
     std::fs::read_to_string(sample()).expect("sample log")
-}
-
-fn crane(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_crane"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("run crane")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
 /// Runs `crane monitor` in `dir` and expects a clean failure (exit 1, no panic) whose message

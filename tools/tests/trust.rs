@@ -4,28 +4,12 @@
 //! seconds declared as milliseconds, get an error or a warning naming the unit key; errors
 //! name the file and the key, say each cause once, and print numbers short.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::path::Path;
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("crane-trust-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("temp dir");
-    d
-}
-
-fn crane(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_crane"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("run crane")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+mod support;
+use support::{crane, stderr, tmp};
 
 /// The entries of `dir` whose names start with a dot: temporaries and scratch folders.
 fn hidden(dir: &Path) -> Vec<String> {

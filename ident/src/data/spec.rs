@@ -451,39 +451,79 @@ fn line_of_key(text: &str, key: &str) -> Option<usize> {
 /// against its plausible range; errors name the file and the line of the key.
 pub fn parse_spec(file: &Path, text: &str) -> Result<DatasetSpec, DataError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let spec: DatasetSpec = toml::from_str(text).map_err(|e| {
-        let line = e
-            .span()
-            .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
-        err(file, line, None, Problem::Toml(clip_quoted(e.message())))
-    })?;
-    let bad = |key: &str, what: String| {
-        let last = key.rsplit('.').next().unwrap_or(key);
-        err(file, line_of_key(text, last), None, Problem::BadValue(what))
-    };
-    let within = |key: &str, v: f64, (lo, hi): (f64, f64), unit: &str| {
-        if v.is_finite() && v >= lo && v <= hi {
-            Ok(())
-        } else {
-            Err(bad(
-                key,
-                format!("{key} must be in [{lo}, {hi}] {unit} (got {v})"),
-            ))
-        }
-    };
-    if let Some(m) = spec.payload_kg {
-        within("payload_kg", m, PAYLOAD_RANGE_KG, "kg")?;
-    }
+    let spec = parse_toml(file, text)?;
+    let ck = Checker { file, text };
     let gain_key = if text.contains("gain_n_per_v") {
         "gain_n_per_v"
     } else {
         "gain"
     };
+    check_scales(&ck, &spec, gain_key)?;
+    check_constants(&ck, &spec.constants)?;
+    check_noise(&ck, &spec.breakaway_noise_var)?;
+    check_controller(file, text, &spec)?;
+    check_run_entries(&ck, &spec, gain_key)?;
+    check_columns(file, text, &spec)?;
+    check_runs_listed(file, text, &spec)?;
+    Ok(spec)
+}
+
+/// The TOML of `text` (without its byte-order mark) as a [`DatasetSpec`]; a syntax or type
+/// error names the file and the line where it starts.
+fn parse_toml(file: &Path, text: &str) -> Result<DatasetSpec, DataError> {
+    toml::from_str(text).map_err(|e| {
+        let line = e
+            .span()
+            .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
+        err(file, line, None, Problem::Toml(clip_quoted(e.message())))
+    })
+}
+
+/// Range checks of `dataset.toml`'s values: errors name the file and the line of the key.
+struct Checker<'a> {
+    /// The file, for the error.
+    file: &'a Path,
+    /// Its text (without the byte-order mark), for the line of the key.
+    text: &'a str,
+}
+
+impl Checker<'_> {
+    /// A bad value of `key` (the line is that of its last dotted component).
+    fn bad(&self, key: &str, what: String) -> DataError {
+        let last = key.rsplit('.').next().unwrap_or(key);
+        err(
+            self.file,
+            line_of_key(self.text, last),
+            None,
+            Problem::BadValue(what),
+        )
+    }
+
+    /// `v` of `key` must be finite and within `[lo, hi]` (`unit` is named in the error).
+    fn within(&self, key: &str, v: f64, (lo, hi): (f64, f64), unit: &str) -> Result<(), DataError> {
+        if v.is_finite() && v >= lo && v <= hi {
+            Ok(())
+        } else {
+            Err(self.bad(
+                key,
+                format!("{key} must be in [{lo}, {hi}] {unit} (got {v})"),
+            ))
+        }
+    }
+}
+
+/// The data set's payload, gain (under `gain_key`, the spelling the text uses), position
+/// scale, and an input unit that must fit the position unit and a gain of 1 when it is an
+/// effort.
+fn check_scales(ck: &Checker<'_>, spec: &DatasetSpec, gain_key: &str) -> Result<(), DataError> {
+    if let Some(m) = spec.payload_kg {
+        ck.within("payload_kg", m, PAYLOAD_RANGE_KG, "kg")?;
+    }
     if let Some(g) = spec.gain_n_per_v {
-        within(gain_key, g, Gain::RANGE, "(effort per input unit)")?;
+        ck.within(gain_key, g, Gain::RANGE, "(effort per input unit)")?;
     }
     if let Some(k) = spec.position_scale {
-        within(
+        ck.within(
             "position_scale",
             k,
             POSITION_SCALE_RANGE,
@@ -493,7 +533,7 @@ pub fn parse_spec(file: &Path, text: &str) -> Result<DatasetSpec, DataError> {
     let effort = spec.position_unit.effort_unit();
     if let Some(u) = spec.input_unit {
         if u.is_effort() && u != effort {
-            return Err(bad(
+            return Err(ck.bad(
                 "input_unit",
                 format!(
                     "input_unit `{}` does not go with position_unit `{}`: a {} axis is driven \
@@ -510,7 +550,7 @@ pub fn parse_spec(file: &Path, text: &str) -> Result<DatasetSpec, DataError> {
             ));
         }
         if u.is_effort() && spec.gain_n_per_v.is_some_and(|g| g != 1.0) {
-            return Err(bad(
+            return Err(ck.bad(
                 gain_key,
                 format!(
                     "the input is already an effort (`{}`): its gain is 1; remove `{gain_key}`",
@@ -519,28 +559,34 @@ pub fn parse_spec(file: &Path, text: &str) -> Result<DatasetSpec, DataError> {
             ));
         }
     }
-    let c = &spec.constants;
-    within(
+    Ok(())
+}
+
+/// The `[constants]`: masses [kg], gravity [m/s^2], pulley radii [m], encoder pulses per
+/// revolution, and the travel ranges [m] (`[min, max]`, at least 1 mm wide; the rope's
+/// `min > 0`).
+fn check_constants(ck: &Checker<'_>, c: &Constants) -> Result<(), DataError> {
+    ck.within(
         "constants.trolley_mass_kg",
         c.trolley_mass_kg,
         MASS_RANGE_KG,
         "kg",
     )?;
-    within(
+    ck.within(
         "constants.rail_mass_kg",
         c.rail_mass_kg,
         (0.0, MASS_RANGE_KG.1),
         "kg",
     )?;
-    within("constants.gravity", c.gravity, GRAVITY_RANGE, "m/s^2")?;
+    ck.within("constants.gravity", c.gravity, GRAVITY_RANGE, "m/s^2")?;
     for (key, v) in [
         ("constants.pulley_radius_x_m", c.pulley_radius_x_m),
         ("constants.pulley_radius_y_m", c.pulley_radius_y_m),
         ("constants.pulley_radius_l_m", c.pulley_radius_l_m),
     ] {
-        within(key, v, RADIUS_RANGE_M, "m")?;
+        ck.within(key, v, RADIUS_RANGE_M, "m")?;
     }
-    within(
+    ck.within(
         "constants.encoder_pulses",
         c.encoder_pulses,
         ENCODER_RANGE,
@@ -556,7 +602,7 @@ pub fn parse_spec(file: &Path, text: &str) -> Result<DatasetSpec, DataError> {
             && r[1] - r[0] >= 1e-3
             && (!positive || r[0] > 0.0);
         if !ok {
-            return Err(bad(
+            return Err(ck.bad(
                 key,
                 format!(
                     "{key} must be [min, max] within [{lo}, {hi}] m, at least 1 mm wide{} \
@@ -568,15 +614,24 @@ pub fn parse_spec(file: &Path, text: &str) -> Result<DatasetSpec, DataError> {
             ));
         }
     }
-    let n = &spec.breakaway_noise_var;
+    Ok(())
+}
+
+/// The `[breakaway_noise_var]` variances [N^2].
+fn check_noise(ck: &Checker<'_>, n: &BreakawayNoise) -> Result<(), DataError> {
     for (key, v) in [
         ("breakaway_noise_var.x_pos", n.x_pos),
         ("breakaway_noise_var.x_neg", n.x_neg),
         ("breakaway_noise_var.y_pos", n.y_pos),
         ("breakaway_noise_var.y_neg", n.y_neg),
     ] {
-        within(key, v, NOISE_VAR_RANGE, "N^2")?;
+        ck.within(key, v, NOISE_VAR_RANGE, "N^2")?;
     }
+    Ok(())
+}
+
+/// The `[controller]` table, if any; an error names the line of the key inside the table.
+fn check_controller(file: &Path, text: &str, spec: &DatasetSpec) -> Result<(), DataError> {
     if let Some(ctl) = &spec.controller {
         ctl.check().map_err(|(key, what)| {
             let line = text
@@ -589,20 +644,27 @@ pub fn parse_spec(file: &Path, text: &str) -> Result<DatasetSpec, DataError> {
             err(file, line, None, Problem::BadValue(what))
         })?;
     }
+    Ok(())
+}
+
+/// Each `[[runs]]` entry: its payload [kg], its gain (under `gain_key`) and a file name.
+fn check_run_entries(
+    ck: &Checker<'_>,
+    spec: &DatasetSpec,
+    gain_key: &str,
+) -> Result<(), DataError> {
     for r in &spec.runs {
         if let Some(m) = r.payload_kg {
-            within("payload_kg", m, PAYLOAD_RANGE_KG, "kg")?;
+            ck.within("payload_kg", m, PAYLOAD_RANGE_KG, "kg")?;
         }
         if let Some(g) = r.gain_n_per_v {
-            within(gain_key, g, Gain::RANGE, "(effort per input unit)")?;
+            ck.within(gain_key, g, Gain::RANGE, "(effort per input unit)")?;
         }
         if r.file.trim().is_empty() {
-            return Err(bad("file", "runs.file must name a CSV file".into()));
+            return Err(ck.bad("file", "runs.file must name a CSV file".into()));
         }
     }
-    check_columns(file, text, &spec)?;
-    check_runs_listed(file, text, &spec)?;
-    Ok(spec)
+    Ok(())
 }
 
 /// The canonical column names a `[columns]` table may rename: the single-axis `t`, `x`, `u`,
