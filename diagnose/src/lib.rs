@@ -52,15 +52,15 @@
 //! On the closed-loop path a finding must also beat its noise floor: its held-out force-NMAE
 //! cut positive in 95 % of a moving-block bootstrap that refits baseline and extension on
 //! resampled fitting blocks and scores them on resampled held-out blocks
-//! (`bootstrap_cuts` in `axis.rs`). The held-out error of one fit was not enough: with one fitting
-//! run the baseline's per-direction position quartic extrapolates on the held-out run, and any
-//! extra column that moves it cuts that run's error by chance (the PD rig with nothing hidden
-//! named a dead band, stiction, localized friction or a 2-sample delay on draws 1, 4, 6, 7 of
-//! `STRANGERS_SEED=0..8`, held-out cuts of 5-35 %, positive in only 60-78 % of the
-//! replicates; a real delay is positive in 95-100 %). `tests/strangers.rs` runs both over the 9
-//! draws. On EMPS the direction asymmetry stays (cut 12.7 %, bootstrap lower bound 9.4 %);
-//! the localized friction it also named against the symmetric baseline (cut 3.3 %) is now
-//! dropped: its bootstrap lower bound is -2.4 %.
+//! (`bootstrap_cuts` in `axis/bootstrap.rs`). The held-out error of one fit was not enough:
+//! with one fitting run the baseline's per-direction position quartic extrapolates on the
+//! held-out run, and any extra column that moves it cuts that run's error by chance (the PD
+//! rig with nothing hidden named a dead band, stiction, localized friction or a 2-sample
+//! delay on draws 1, 4, 6, 7 of `STRANGERS_SEED=0..8`, held-out cuts of 5-35 %, positive in
+//! only 60-78 % of the replicates; a real delay is positive in 95-100 %). `tests/strangers.rs`
+//! runs both over the 9 draws. On EMPS the direction asymmetry stays (cut 12.7 %, bootstrap
+//! lower bound 9.4 %); the localized friction it also named against the symmetric baseline
+//! (cut 3.3 %) is now dropped: its bootstrap lower bound is -2.4 %.
 //!
 //! Known limits: on the spring + dead band rig some input draws (`STRANGERS_SEED=2`) name a
 //! 2-sample delay for the dead band (open-loop path, not changed here). The closed-loop

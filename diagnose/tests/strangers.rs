@@ -967,8 +967,8 @@ fn strangers_rigs_are_diagnosed_honestly() {
 }
 
 /// The closed-loop PD rig with nothing hidden, over 9 draws of its inputs and noise: no
-/// cause is named on any (before the bootstrap rule of `axis.rs`, draws 1, 4, 6 and 7 named a
-/// dead band, stiction, localized friction or a 2-sample delay).
+/// cause is named on any (before the bootstrap rule of `axis/select.rs`, draws 1, 4, 6 and 7
+/// named a dead band, stiction, localized friction or a 2-sample delay).
 #[test]
 fn closed_loop_rig_names_nothing_over_many_draws() {
     let mut failures = Vec::new();
@@ -995,7 +995,7 @@ fn closed_loop_rig_names_nothing_over_many_draws() {
 /// The power side of the same rule: the closed-loop PD rig with the drive seeing its input 3
 /// samples late, over the same 9 draws, names the delay every time (and nothing else), at
 /// the truth plus the zero-order hold's sample (the inverse-dynamics rows put the force half
-/// a sample late whatever the rig does, see `axis.rs`) within one sample: 4 samples on 8
+/// a sample late whatever the rig does, see `axis/input.rs`) within one sample: 4 samples on 8
 /// draws, 5 on one.
 #[test]
 fn closed_loop_rig_finds_a_real_delay_over_many_draws() {

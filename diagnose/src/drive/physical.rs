@@ -192,7 +192,7 @@ fn saturation(est: &Estimate, umax: f64) -> (bool, Option<String>) {
 /// sliding data fix only the two dry levels, not how they split into a load and a friction
 /// asymmetry; at rest the two differ only if the load alone moves the axis (it exceeds the
 /// breakaway), or on data with a known load change. The closed-loop path states the same
-/// (`axis.rs`).
+/// (`axis/select.rs`).
 ///
 /// With a dry level per direction already in the model, an offset is named only when it
 /// exceeds one of them ([`physical`]): then no shift of the levels reproduces it, and it is
