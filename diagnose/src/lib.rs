@@ -177,19 +177,39 @@ pub enum Baseline {
 /// `--force` ([`foreign_plot`]).
 pub const PLOT_MARK: &str = "<!-- written by crane diagnose -->";
 
+/// How the mark of every plot the `crane` command line writes begins ([`PLOT_MARK`] here,
+/// `<!-- written by crane identify -->` and the like for the other commands): a file whose
+/// first kilobyte holds it is one of the tool's own plots ([`is_crane_plot`]).
+pub const PLOT_MARK_PREFIX: &str = "<!-- written by crane";
+
 /// `svg` with [`PLOT_MARK`] after its opening tag (the file still starts with `<svg`).
 pub fn mark_plot(svg: &str) -> String {
+    mark_plot_with(svg, PLOT_MARK)
+}
+
+/// `svg` with `mark` (a comment beginning with [`PLOT_MARK_PREFIX`]) after its opening tag.
+pub fn mark_plot_with(svg: &str, mark: &str) -> String {
     match svg.find('>') {
-        Some(i) => format!("{}{PLOT_MARK}{}", &svg[..=i], &svg[i + 1..]),
+        Some(i) => format!("{}{mark}{}", &svg[..=i], &svg[i + 1..]),
         None => svg.to_string(),
     }
 }
 
-/// The first `.svg` file in `dir` that `crane diagnose` did not write (no [`PLOT_MARK`] in its
-/// first kilobyte): a user's own figure, which a run with `--plots dir` must not replace
+/// Whether the file at `path` is a plot the `crane` command line wrote (its first kilobyte
+/// holds [`PLOT_MARK_PREFIX`]); `false` when it cannot be read.
+pub fn is_crane_plot(path: &std::path::Path) -> bool {
+    use std::io::Read;
+    let mut head = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(1024).read_to_end(&mut head))
+        .is_ok()
+        && String::from_utf8_lossy(&head).contains(PLOT_MARK_PREFIX)
+}
+
+/// The first `.svg` file in `dir` that the `crane` command line did not write
+/// ([`is_crane_plot`]): a user's own figure, which a run with `--plots dir` must not replace
 /// without `--force`. `None` when the folder is missing or holds only the tool's plots.
 pub fn foreign_plot(dir: &std::path::Path) -> Option<PathBuf> {
-    use std::io::Read;
     let entries = std::fs::read_dir(dir).ok()?;
     let mut names: Vec<PathBuf> = entries
         .flatten()
@@ -197,14 +217,7 @@ pub fn foreign_plot(dir: &std::path::Path) -> Option<PathBuf> {
         .filter(|p| p.extension().is_some_and(|x| x == "svg"))
         .collect();
     names.sort();
-    names.into_iter().find(|p| {
-        let mut head = Vec::new();
-        let ours = std::fs::File::open(p)
-            .and_then(|f| f.take(1024).read_to_end(&mut head))
-            .is_ok()
-            && String::from_utf8_lossy(&head).contains(PLOT_MARK);
-        !ours
-    })
+    names.into_iter().find(|p| !is_crane_plot(p))
 }
 
 /// Options of [`diagnose`].

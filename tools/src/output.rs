@@ -29,6 +29,13 @@ pub enum OutputError {
         /// The data set directory.
         dataset: PathBuf,
     },
+    /// The output would replace an SVG file the command line did not write (a user's own
+    /// figure of the same name).
+    #[error("{out} was not written by crane; refusing to replace it with a plot (choose another output folder or file, or pass --force)")]
+    ForeignPlot {
+        /// The output path.
+        out: PathBuf,
+    },
     /// Two outputs of one command are the same file.
     #[error("{out}: {why}")]
     Clash {
@@ -176,6 +183,20 @@ impl Outputs {
                 path: out.to_path_buf(),
                 source,
             })
+    }
+
+    /// Stages the SVG plot `svg` of command `command` (`identify`, `validate`, ...) at `out`,
+    /// marked as the tool's own ([`crane_diagnose::mark_plot_with`]). An existing file there
+    /// that the tool did not write ([`crane_diagnose::is_crane_plot`]: a user's own figure of
+    /// the same name) is refused without `--force`; the tool's own plots are replaced.
+    pub fn stage_plot(&mut self, out: &Path, command: &str, svg: &str) -> Result<(), OutputError> {
+        if !self.force && out.is_file() && !crane_diagnose::is_crane_plot(out) {
+            return Err(OutputError::ForeignPlot {
+                out: out.to_path_buf(),
+            });
+        }
+        let mark = format!("<!-- written by crane {command} -->");
+        self.stage(out, crane_diagnose::mark_plot_with(svg, &mark))
     }
 
     /// Checks `out` and creates its folder; returns a file to write in pieces, to be handed

@@ -54,7 +54,7 @@ pub fn validation(
         draw(&mut svg, &run.t, &meas, &sim, &rv.nmae_pct)
             .map_err(|e| anyhow::anyhow!("{e}"))
             .with_context(|| format!("plot {}", path.display()))?;
-        outputs.stage(&path, svg)?;
+        outputs.stage_plot(&path, "validate", &svg)?;
         files.push(path);
     }
     Ok(files)
@@ -160,7 +160,7 @@ pub fn friction(
         draw_friction(&mut svg, name, [&d.dry_pos, &d.dry_neg], truths)
             .map_err(|e| anyhow::anyhow!("{e}"))
             .with_context(|| format!("plot {}", path.display()))?;
-        outputs.stage(&path, svg)?;
+        outputs.stage_plot(&path, "identify", &svg)?;
         files.push(path);
     }
     Ok(files)
@@ -345,7 +345,7 @@ pub fn simulation(rec: &SimulationRecord, path: &Path, outputs: &mut Outputs) ->
     draw_simulation(rec, &mut svg)
         .map_err(|e| anyhow::anyhow!("{e}"))
         .with_context(|| format!("plot {}", path.display()))?;
-    outputs.stage(path, svg)?;
+    outputs.stage_plot(path, "simulate", &svg)?;
     Ok(())
 }
 

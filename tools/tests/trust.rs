@@ -77,7 +77,8 @@ fn a_failed_command_leaves_every_earlier_output_as_it_was() {
         "an output was replaced"
     );
     std::fs::remove_dir(&fy).unwrap();
-    std::fs::write(&fy, "<svg/>").unwrap();
+    // (one of the tool's own plots, which a later run may replace)
+    std::fs::write(&fy, "<svg><!-- written by crane identify --></svg>").unwrap();
     // demo: its very last output (the validation plot) is a folder
     let val = d.join("out/plots/validation_078_validation_multisine.svg");
     std::fs::remove_file(&val).unwrap();
@@ -139,6 +140,65 @@ fn a_failed_command_leaves_every_earlier_output_as_it_was() {
     let o = crane(&d, &["identify", "--out", "ms.toml", "--plots", "ms"]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("time_unit"), "{}", stderr(&o));
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// A plot is written over the tool's own plot of the same name, never over a user's file
+/// without `--force` (issue 22: `identify` replaced a user's `friction_x.svg`); the command
+/// then fails before any of its outputs is written, and names the file.
+#[test]
+fn plots_replace_only_the_tools_own() {
+    let d = tmp("plots_own");
+    let o = crane(&d, &["demo"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (params, fx) = (
+        d.join("out/params.toml"),
+        d.join("out/plots/friction_x.svg"),
+    );
+    // the tool's own plots are replaced by a run again
+    let o = crane(&d, &["identify"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(std::fs::read_to_string(&fx)
+        .unwrap()
+        .contains("<!-- written by crane identify -->"));
+    // a user's figure of the same name is not, and nothing else is written
+    let mine = "<svg xmlns=\"http://www.w3.org/2000/svg\"><text>my figure</text></svg>";
+    std::fs::write(&fx, mine).unwrap();
+    let before = inode(&params);
+    let o = crane(&d, &["identify"]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("friction_x.svg") && e.contains("not written by crane") && e.contains("--force"),
+        "{e}"
+    );
+    assert_eq!(std::fs::read_to_string(&fx).unwrap(), mine);
+    assert_eq!(inode(&params), before, "params.toml was replaced");
+    // validate and simulate likewise (simulate's plot goes beside its CSV)
+    let val = d.join("out/plots/validation_078_validation_multisine.svg");
+    std::fs::write(&val, mine).unwrap();
+    let o = crane(&d, &["validate"]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("validation_078"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(std::fs::read_to_string(&val).unwrap(), mine);
+    std::fs::write(d.join("out/simulation.svg"), mine).unwrap();
+    let o = crane(&d, &["simulate"]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("simulation.svg"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(
+        !d.join("out/simulation.csv").exists(),
+        "the CSV was written"
+    );
+    // with --force the user asked for it
+    let o = crane(&d, &["identify", "--force"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_ne!(std::fs::read_to_string(&fx).unwrap(), mine);
     let _ = std::fs::remove_dir_all(&d);
 }
 
