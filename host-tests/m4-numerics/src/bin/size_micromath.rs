@@ -1,0 +1,5 @@
+//! Flash of `micromath` (see `size_main!`).
+#![no_std]
+#![no_main]
+
+m4_numerics::size_main!(|x: f32| m4_numerics::micromath_sincos(core::hint::black_box(x)));
