@@ -39,7 +39,19 @@ __all__ = [
     "StepError",
 ]
 
-__version__ = "0.1.0"
+def _version() -> str:
+    """The installed distribution's version (python/Cargo.toml's, which maturin writes into
+    the wheel's metadata), so that it cannot drift from the package; "0+unknown" when the
+    module is imported from a source tree that was never installed."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("crane_twin")
+    except PackageNotFoundError:
+        return "0+unknown"
+
+
+__version__ = _version()
 
 
 def _register() -> None:

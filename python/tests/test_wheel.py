@@ -117,3 +117,15 @@ def test_installed_from_an_abi3_manylinux_wheel():
     assert tags and all("-abi3-" in t for t in tags), f"wheel tags {tags}: not abi3"
     if sys.platform.startswith("linux"):
         assert any("manylinux" in t for t in tags), f"wheel tags {tags}: not manylinux"
+
+
+@wheel_only
+def test_wheel_carries_both_licences():
+    """The wheel holds the texts of both licences it is offered under (MIT OR Apache-2.0):
+    a redistributed binary must carry them."""
+    dist = metadata.distribution(DIST)
+    names = {Path(str(f)).name for f in dist.files or []}
+    for licence in ("LICENSE-MIT", "LICENSE-APACHE"):
+        assert licence in names, f"{licence} is not in the installed wheel's files: {sorted(names)}"
+    mit = next(f for f in dist.files if Path(str(f)).name == "LICENSE-MIT")
+    assert "Permission is hereby granted" in mit.read_text(encoding="utf-8")
