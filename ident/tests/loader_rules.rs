@@ -799,3 +799,20 @@ fn millimetres_declared_as_metres_are_refused_naming_position_scale() {
     let x = &ds.runs[0].axis().unwrap().x;
     assert!((x[399] - 0.3 * 0.399).abs() < 1e-12);
 }
+
+#[test]
+fn a_runs_bad_value_is_named_at_its_own_line_and_printed_short() {
+    // the data set's `payload_kg` comes first in the file; the bad one is the second run's
+    // (before: line 1, and the value printed as a 100-digit integer)
+    let toml = "payload_kg = 0.5\n[[runs]]\nfile = \"run.csv\"\npayload_kg = 0.2\n\
+                [[runs]]\nfile = \"run.csv\"\npayload_kg = 1e99\n";
+    let (d, e) = fails(toml, &axis_csv(10, 0.01));
+    assert_eq!(e.location.file, d.join("dataset.toml"));
+    assert_eq!(e.location.line, Some(7), "{e}");
+    let msg = e.to_string();
+    assert!(msg.contains("got 1e99") && msg.len() < 300, "{msg}");
+    // an empty file name of the first run: its own line too
+    let toml = "[[runs]]\nfile = \"run.csv\"\n[[runs]]\nfile = \" \"\n";
+    let (_, e) = fails(toml, &axis_csv(10, 0.01));
+    assert_eq!(e.location.line, Some(4), "{e}");
+}

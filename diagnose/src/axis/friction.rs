@@ -19,12 +19,21 @@ use crate::Cause;
 pub(super) fn localized_friction(prep: &Prepared, base: &BaselineFit, out: &mut Candidates) {
     let (fit, held) = (&prep.fit, &prep.held);
     let (lo, hi) = (base.lo, base.hi);
-    let mut best: Option<(f64, f64, f64, i32)> = None;
+    // a bump needs a travel: fitting positions that never change (or a range too small to
+    // step through) leave no site to try, and the grid below would never end
     let step = (hi - lo) / 30.0;
+    if !(step > 0.0 && step.is_finite() && lo + step > lo) {
+        return;
+    }
+    let mut best: Option<(f64, f64, f64, i32)> = None;
     for wi in [0.02, 0.04, 0.08, 0.15] {
         let w = wi * (hi - lo);
         let mut c = lo;
-        while c <= hi {
+        // at most 31 centres (30 steps, one more where the sum of the steps rounds below hi)
+        for _ in 0..31 {
+            if c > hi {
+                break;
+            }
             for d in [0, 1, -1] {
                 if let Some(Fitted { sse_f: sf, .. }) = base.cols.eval(
                     &[bump_column(fit, c, w, d)],

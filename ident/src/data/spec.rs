@@ -2,6 +2,7 @@
 
 use super::error::{clip_quoted, err, DataError, Problem};
 use super::units::{Gain, InputUnit, PositionUnit, TimeUnit};
+use crate::num::Num;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -255,7 +256,12 @@ impl ControllerSpec {
             } else {
                 Err((
                     key,
-                    format!("controller.{key} must be in [{lo}, {hi}] (got {v})"),
+                    format!(
+                        "controller.{key} must be in [{}, {}] (got {})",
+                        Num(lo),
+                        Num(hi),
+                        Num(v)
+                    ),
                 ))
             }
         };
@@ -294,7 +300,10 @@ impl ControllerSpec {
             if !(s.is_finite() && s > 0.0 && s <= 1e9) {
                 return Err((
                     "saturation",
-                    format!("controller.saturation must be in (0, 1e9] input units (got {s})"),
+                    format!(
+                        "controller.saturation must be in (0, 1e9] input units (got {})",
+                        Num(s)
+                    ),
                 ));
             }
         }
@@ -447,6 +456,27 @@ fn line_of_key(text: &str, key: &str) -> Option<usize> {
         .map(|i| i + 1)
 }
 
+/// The line (1-based) of `key` in the `index`-th (0-based) `[[runs]]` table of `text`;
+/// `None` when the runs are not written as tables or the key is not in that one.
+fn line_of_run_key(text: &str, index: usize, key: &str) -> Option<usize> {
+    let (mut seen, mut inside) = (0usize, false);
+    for (n, l) in text.lines().enumerate() {
+        let l = l.trim_start();
+        if l.starts_with('[') {
+            inside = l.starts_with("[[runs]]") && {
+                seen += 1;
+                seen == index + 1
+            };
+        } else if inside
+            && l.strip_prefix(key)
+                .is_some_and(|rest| rest.trim_start().starts_with('='))
+        {
+            return Some(n + 1);
+        }
+    }
+    None
+}
+
 /// Parses `dataset.toml` text (a UTF-8 byte-order mark is skipped) and checks every number
 /// against its plausible range; errors name the file and the line of the key.
 pub fn parse_spec(file: &Path, text: &str) -> Result<DatasetSpec, DataError> {
@@ -500,14 +530,30 @@ impl Checker<'_> {
     }
 
     /// `v` of `key` must be finite and within `[lo, hi]` (`unit` is named in the error).
-    fn within(&self, key: &str, v: f64, (lo, hi): (f64, f64), unit: &str) -> Result<(), DataError> {
+    fn within(&self, key: &str, v: f64, range: (f64, f64), unit: &str) -> Result<(), DataError> {
+        let last = key.rsplit('.').next().unwrap_or(key);
+        self.within_at(line_of_key(self.text, last), key, v, range, unit)
+    }
+
+    /// [`Checker::within`] for a key at `line` (1-based; `None`: not found).
+    fn within_at(
+        &self,
+        line: Option<usize>,
+        key: &str,
+        v: f64,
+        (lo, hi): (f64, f64),
+        unit: &str,
+    ) -> Result<(), DataError> {
         if v.is_finite() && v >= lo && v <= hi {
             Ok(())
         } else {
-            Err(self.bad(
-                key,
-                format!("{key} must be in [{lo}, {hi}] {unit} (got {v})"),
-            ))
+            let what = format!(
+                "{key} must be in [{}, {}] {unit} (got {})",
+                Num(lo),
+                Num(hi),
+                Num(v)
+            );
+            Err(err(self.file, line, None, Problem::BadValue(what)))
         }
     }
 }
@@ -653,15 +699,20 @@ fn check_run_entries(
     spec: &DatasetSpec,
     gain_key: &str,
 ) -> Result<(), DataError> {
-    for r in &spec.runs {
+    for (i, r) in spec.runs.iter().enumerate() {
+        // the line of the key in this run's own table (the data set's keys of the same name
+        // come first in the file)
+        let line = |key: &str| line_of_run_key(ck.text, i, key).or(line_of_key(ck.text, key));
         if let Some(m) = r.payload_kg {
-            ck.within("payload_kg", m, PAYLOAD_RANGE_KG, "kg")?;
+            ck.within_at(line("payload_kg"), "payload_kg", m, PAYLOAD_RANGE_KG, "kg")?;
         }
         if let Some(g) = r.gain_n_per_v {
-            ck.within(gain_key, g, Gain::RANGE, "(effort per input unit)")?;
+            let what = "(effort per input unit)";
+            ck.within_at(line(gain_key), gain_key, g, Gain::RANGE, what)?;
         }
         if r.file.trim().is_empty() {
-            return Err(ck.bad("file", "runs.file must name a CSV file".into()));
+            let what = Problem::BadValue("runs.file must name a CSV file".into());
+            return Err(err(ck.file, line("file"), None, what));
         }
     }
     Ok(())
