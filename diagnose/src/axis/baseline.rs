@@ -85,6 +85,21 @@ pub(super) struct BaselineFit {
 }
 
 impl BaselineFit {
+    /// The baseline's force NMAE on the fitting rows [%]: mean |residual| over the range of
+    /// the fitting force (`NaN`, reported as null, when that range is 0).
+    pub(super) fn nmae_fit(&self, prep: &Prepared) -> f64 {
+        let f = &prep.fit.f;
+        let range = f.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
+            - f.iter().cloned().fold(f64::INFINITY, f64::min);
+        let cols: Vec<&[f64]> = self.cols.fit.iter().map(|c| c.as_slice()).collect();
+        let e = mae(&cols, &self.fitted.theta, f);
+        if range > 0.0 {
+            100.0 * e / range
+        } else {
+            f64::NAN
+        }
+    }
+
     /// The extra columns `ef` / `eh` on the measured force: the design and its fit.
     pub(super) fn fit_extra(
         &self,

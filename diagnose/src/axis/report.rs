@@ -57,7 +57,7 @@ pub(super) fn report(ds: &Dataset, prep: Prepared, base: &BaselineFit, sel: Sele
     let n_h = prep.held.f.len();
     let baseline_errors = vec![AxisError {
         axis: "axis".into(),
-        nmae_fit: f64::NAN,
+        nmae_fit: base.nmae_fit(&prep),
         nmae_held_out: 100.0 * mae0 / base.hrange,
         nmae_noise: 0.0,
         nmae_own_log: None,
