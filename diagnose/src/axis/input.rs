@@ -11,8 +11,13 @@ use crate::Cause;
 
 /// Input delay: the force acts m samples later, m on the grid 0..=[`MAXD`] (0 included: no
 /// delay at all may fit best), chosen by the fitting squared error; named only above one
-/// sample. Parameter: `delay_s` [s] (m times the sample period, positive: the force lags
-/// the recorded input).
+/// sample. Parameter: `delay_s` [s] (m times the sample period, positive: the force lags the
+/// recorded input).
+///
+/// Known limit: a delay at the grid's last point is still offered. A 30-sample delay at
+/// 1 kHz (a PD-loop rig of `tests/strangers.rs` with `delay = 30`) is named at 12 samples;
+/// not offering it gave `none` on that rig, a worse claim. The grid should reach 0.25 s
+/// instead (issue 20).
 pub(super) fn input_delay(prep: &Prepared, base: &BaselineFit, out: &mut Candidates) {
     let (fit, held) = (&prep.fit, &prep.held);
     let mut best: Option<(f64, usize)> = None;
@@ -46,7 +51,8 @@ pub(super) fn input_delay(prep: &Prepared, base: &BaselineFit, out: &mut Candida
 }
 
 /// Input dead band [V, or input units] (force / gain): a grid of 30 widths, multiples of
-/// 0.5 % of the fitting rows' largest input, chosen by the fitting squared error.
+/// 0.5 % of the fitting rows' largest input, chosen by the fitting squared error; not
+/// offered at the grid's last point.
 /// Parameter: `deadzone_v` (the band's half width `d`: an input `|u| <= d` gives no force,
 /// a larger one `u - sign(u) d`).
 pub(super) fn input_deadzone(prep: &Prepared, base: &BaselineFit, out: &mut Candidates) {
@@ -66,7 +72,8 @@ pub(super) fn input_deadzone(prep: &Prepared, base: &BaselineFit, out: &mut Cand
             }
         }
     }
-    if let Some((_, d)) = best {
+    // a band at the grid's last point is no result: the best one may lie beyond it
+    if let Some((_, d)) = best.filter(|b| b.1 < umax * 0.005 * 30.0) {
         out.offer(
             Cause::InputDeadzone,
             params(&[("deadzone_v", d)]),

@@ -30,7 +30,8 @@ fn shifted(
 }
 
 /// The input-dead-band candidate of one drive (`gain` [N/V]): the band [V] on a 20 mV grid
-/// up to 1.5 V, refined to a millivolt, by the fitting part's residual.
+/// up to 1.5 V, refined to a millivolt, by the fitting part's residual; none when the best
+/// grid point is the last (the grid's edge).
 pub(super) fn deadzone_candidate(ctx: &Ctx, part: &DriveParts, gain: f64) -> Option<Cand> {
     let (i, fg, hg) = (part.i, part.fit, part.held);
     let score_dz = |d: f64| {
@@ -50,10 +51,15 @@ pub(super) fn deadzone_candidate(ctx: &Ctx, part: &DriveParts, gain: f64) -> Opt
         }
     };
     let mut best_dz: Option<(f64, f64)> = None;
-    let mut d = 0.02;
+    let (mut d, mut last) = (0.02, 0.0);
     while d <= 1.5 + 1e-9 {
         keep(&mut best_dz, d);
+        last = d;
         d += 0.02;
+    }
+    // a band at the grid's last point is no result: the best one may lie beyond it
+    if best_dz.is_some_and(|b| b.1 == last) {
+        return None;
     }
     // refine to a millivolt: the grid step alone leaves a dry-force error of `K * 0.01 V`,
     // enough for a symmetric dry-friction shift to out-score the right cause
@@ -82,8 +88,9 @@ pub(super) fn deadzone_candidate(ctx: &Ctx, part: &DriveParts, gain: f64) -> Opt
 }
 
 /// The input-delay candidate of one drive (`gain` [N/V]): the delay in half samples, 1 to
-/// `MAX_DELAY_STEPS - 1`, by the fitting part's residual; reported in seconds (half the
-/// first run's sampling period per step, 1 ms when there is no run).
+/// `MAX_DELAY_STEPS - 1`, by the fitting part's residual (none at the last, the grid's edge);
+/// reported in seconds (half the first run's sampling period per step, 1 ms when there is no
+/// run).
 pub(super) fn delay_candidate(ctx: &Ctx, part: &DriveParts, gain: f64) -> Option<Cand> {
     let (i, fg, hg) = (part.i, part.fit, part.held);
     let dt = ctx.preps.first().map(|p| p.run.dt()).unwrap_or(0.002);
@@ -95,7 +102,8 @@ pub(super) fn delay_candidate(ctx: &Ctx, part: &DriveParts, gain: f64) -> Option
             best_dl = Some((s, m));
         }
     }
-    let (_, m) = best_dl?;
+    // a delay at the grid's last point is no result: the best one may lie beyond it
+    let (_, m) = best_dl.filter(|b| b.1 < crane_model::MAX_DELAY_STEPS - 1)?;
     let col = shifted(ctx, i, gain, &|u: &[f64]| delay_half_samples(u, m), true);
     let s = part.with_held_sse(sse_one(&col, 1.0, &hg.r));
     Some(Cand {
