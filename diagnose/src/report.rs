@@ -34,11 +34,17 @@ pub enum Cause {
     /// and ball screws): every dry level plus `mu |F|` of the drive effort (single-axis
     /// open-loop data).
     LoadDependentFriction,
+    /// Velocity weakening (Stribeck): the dry friction of a moving axis falls from the
+    /// breakaway (static) level to the sliding level as `exp(-(v / stribeck_velocity)^2)`, so
+    /// slow ramps stick and slip (single-axis open-loop data). Parameters: `static_pos`,
+    /// `static_neg`, `sliding_pos`, `sliding_neg` [force units] and `stribeck_velocity` [m/s
+    /// or rad/s].
+    StribeckFriction,
 }
 
 impl Cause {
     /// Every cause.
-    pub const ALL: [Cause; 10] = [
+    pub const ALL: [Cause; 11] = [
         Cause::LocalizedFriction,
         Cause::Stiction,
         Cause::DirectionAsymmetry,
@@ -49,6 +55,7 @@ impl Cause {
         Cause::PayloadMass,
         Cause::RestoringForce,
         Cause::LoadDependentFriction,
+        Cause::StribeckFriction,
     ];
 
     /// The report name (`snake_case`).
@@ -64,6 +71,7 @@ impl Cause {
             Cause::PayloadMass => "payload_mass",
             Cause::RestoringForce => "restoring_force",
             Cause::LoadDependentFriction => "load_dependent_friction",
+            Cause::StribeckFriction => "stribeck_friction",
         }
     }
 }

@@ -641,6 +641,25 @@ fn rigs_drawn(seed: u64) -> Vec<Rig> {
         r.must = &[Cause::LocalizedFriction];
         v.push(r);
     }
+    // 17. a carriage whose dry friction weakens with speed (Stribeck: breakaway 6 N falling to
+    //     3 N sliding over 0.03 m/s), force input, slow ramps that stick and slip: stiction
+    //     whose friction drops the moment the carriage moves would slip too far
+    {
+        let dt = 1e-3;
+        let mut truth = lin(2.0, [3.0; 2], [6.0; 2], [10.0; 2]);
+        truth.stribeck_velocity = 0.03;
+        let runs = (0..4)
+            .map(|k| {
+                let s = if k % 2 == 0 { 1.0 } else { -1.0 };
+                ramps(dt, &[9.0 * s, -8.0 * s, 7.0 * s], 6.0, 1.0)
+            })
+            .collect();
+        let mut r = base("linear_stribeck_N_1kHz", truth, dt, runs);
+        r.quantum = 1e-6;
+        r.effects = &[Cause::StribeckFriction];
+        r.must = &[Cause::StribeckFriction];
+        v.push(r);
+    }
     v
 }
 
@@ -748,6 +767,14 @@ fn judge(rig: &Rig, r: &Report) -> Vec<String> {
                             p("center_m")
                         ));
                     }
+                }
+            }
+            Cause::StribeckFriction => {
+                let truth = rig.truth.breakaway_pos / rig.truth.kinetic_pos;
+                let ratio =
+                    0.5 * (p("static_pos") / p("sliding_pos") + p("static_neg") / p("sliding_neg"));
+                if !((ratio - truth).abs() <= 0.25 * truth) {
+                    bad.push(format!("static / sliding {ratio}, truth {truth}"));
                 }
             }
             Cause::LoadDependentFriction

@@ -3,9 +3,10 @@
 use crate::Cause;
 
 /// Every cause tried on single-axis open-loop data, in the order they are tried.
-pub const DRIVE_CAUSES: [Cause; 9] = [
+pub const DRIVE_CAUSES: [Cause; 10] = [
     Cause::RestoringForce,
     Cause::Stiction,
+    Cause::StribeckFriction,
     Cause::DirectionAsymmetry,
     Cause::ForceOffset,
     Cause::InputDeadzone,

@@ -18,6 +18,7 @@
 //! axis only says that its net force stayed inside the breakaway band, which is what the
 //! simulation scores.
 
+use super::breakaway::{self, Interval};
 use super::prep::{motions, onset, Prepared, Thresholds};
 use crane_model::drive::{DriveParams, LocalFriction, Motion, PositionForce};
 use crane_model::extensions::deadband;
@@ -88,6 +89,24 @@ pub struct Structure {
     /// its amplitude fitted by the sliding least squares as the coefficient of
     /// `sign(v) kernel(x)`; `None`: no bump.
     pub bump: Option<BumpSite>,
+    /// Stribeck velocity [m/s or rad/s] (velocity weakening: the dry friction of a moving axis
+    /// is `kinetic + (breakaway - kinetic) exp(-(v / stribeck)^2)`, the model's
+    /// [`DriveParams::stribeck_velocity`]); needs [`Self::stiction`]; 0: none (fixed, searched
+    /// on a grid by the caller).
+    pub stribeck: f64,
+}
+
+impl Structure {
+    /// The Stribeck weight `exp(-(v / stribeck)^2)` of a velocity `v` [1]: 1 at rest, 0 far
+    /// above the Stribeck velocity; 0 without velocity weakening.
+    pub fn stribeck_weight(&self, v: f64) -> f64 {
+        if self.stribeck > 0.0 {
+            let r = v / self.stribeck;
+            libm::exp(-(r * r))
+        } else {
+            0.0
+        }
+    }
 }
 
 /// Where a bump of dry friction sits: `b(x) = A (1 - s^2)^2` for `|s| < 1`,
@@ -243,6 +262,11 @@ impl fmt::Display for EstimateError {
     }
 }
 
+/// Largest mean Stribeck weight over the slips with which the sliding level is solved from
+/// their mean friction ([`estimate`]): above it the slips hardly leave the weakening range,
+/// and `1 / (1 - G)` would amplify the energy balance's error more than 5-fold.
+pub const MAX_STRIBECK_WEIGHT: f64 = 0.8;
+
 /// Minimum sliding samples for a direction's friction to be fitted.
 pub const MIN_DIRECTION_ROWS: usize = 8;
 
@@ -317,7 +341,7 @@ pub fn estimate(
     let asym = s.asymmetric && fit_pos && fit_neg;
     let both = fit_pos && fit_neg;
     // pass 1: every coefficient free (within its bounds)
-    let first = ls_pass(&rows, &s, asym, both, None).ok_or(EstimateError::Singular)?;
+    let first = ls_pass(&rows, &s, asym, both, None, [0.0; 2]).ok_or(EstimateError::Singular)?;
     let kinetic_ls = first.kin;
     let mut ls = first;
     // --- 2. breakaway at first motion, 3. kinetic <= breakaway -----------------------------
@@ -330,18 +354,21 @@ pub fn estimate(
     let mut breakaway_scatter = [None, None];
     let mut kin_flags = Vec::new();
     let mut gaps: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
+    let mut weights: [Vec<f64>; 2];
     for _pass in 0..2 {
-        let onsets;
-        (first_motion, onsets) = onset_levels(fit, th, &s, motion, center, &ls);
-        breakaway_scatter = [std_dev(&onsets[0]), std_dev(&onsets[1])];
+        let on = onset_levels(fit, th, &s, motion, center, &ls);
+        first_motion = on.first_motion;
+        breakaway_scatter = [0, 1]
+            .map(|d| breakaway::level(&on.all[d]).and_then(|b| breakaway::scatter(&on.all[d], b)));
         kin_flags.clear();
         for dir in Dir::BOTH {
             let d = dir.index();
-            brk[d] = if first_motion[d].is_empty() {
-                kin_flags.push(Flag::NoFirstMotion { dir });
-                ls.kin[d]
-            } else {
-                median(first_motion[d].clone()).max(0.0)
+            brk[d] = match breakaway::level(&on.first[d]) {
+                Some(b) => b.max(0.0),
+                None => {
+                    kin_flags.push(Flag::NoFirstMotion { dir });
+                    ls.kin[d]
+                }
             };
         }
         if !fit_pos && first_motion[0].is_empty() {
@@ -355,7 +382,7 @@ pub fn estimate(
         // mean friction = integral (F - P(x)) dx / dx_total, minus the viscous part; the gap
         // of a slip is its onset level minus that. This needs no acceleration estimate, which
         // at a few samples per slip is the least reliable signal.
-        gaps = slip_gaps(
+        (gaps, weights) = slip_gaps(
             fit,
             th,
             &s,
@@ -364,6 +391,7 @@ pub fn estimate(
             ls.stiffness,
             ls.offset,
             ls.visc,
+            brk,
         );
         if !s.stiction && level == DryLevel::Sliding {
             brk = kinetic_ls;
@@ -377,7 +405,10 @@ pub fn estimate(
             let energy_kinetic = if gaps[d].is_empty() {
                 ls.kin[d]
             } else {
-                brk[d] - mean(&gaps[d])
+                // the mean friction over the slips is `kinetic + (brk - kinetic) G`, G the
+                // slips' mean Stribeck weight per distance (0 without weakening)
+                let g = mean(&weights[d]).min(MAX_STRIBECK_WEIGHT);
+                (brk[d] - mean(&gaps[d]) - brk[d] * g) / (1.0 - g)
             };
             if energy_kinetic > brk[d] {
                 kin_flags.push(Flag::KineticClamped {
@@ -388,7 +419,7 @@ pub fn estimate(
                 fixed[d] = energy_kinetic.max(0.0);
             }
         }
-        ls = ls_pass(&rows, &s, asym, both, Some(fixed)).ok_or(EstimateError::Singular)?;
+        ls = ls_pass(&rows, &s, asym, both, Some(fixed), brk).ok_or(EstimateError::Singular)?;
         ls.kin = fixed;
     }
     flags.extend(ls.flags.iter().copied());
@@ -460,7 +491,7 @@ fn onset_levels(
     motion: Motion,
     center: f64,
     ls: &LsFit,
-) -> ([Vec<f64>; 2], [Vec<f64>; 2]) {
+) -> Onsets {
     // the force withstood at an onset, net of the position force and offset, and with
     // load-dependent friction net of its load share (`F - mu |F|` is the dry level)
     let net = |p: &Prepared, i: usize| {
@@ -471,28 +502,70 @@ fn onset_levels(
     let bump_at =
         |p: &Prepared, i: usize| s.bump.map_or(0.0, |site| ls.bump * site.kernel(p.run.x[i]));
     let mut first_motion: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
-    let mut onsets: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
+    let mut first_iv: [Vec<Interval>; 2] = [Vec::new(), Vec::new()];
+    let mut onsets: [Vec<Interval>; 2] = [Vec::new(), Vec::new()];
     for p in fit {
+        let level = |i: usize, sg: f64| sg * net(p, i) - bump_at(p, i);
         for dir in Dir::BOTH {
             let sg = dir.sign();
             let m = motions(&p.v, th.v_move, sg);
-            // first motion: the run must start at rest
+            let from_rest = |i: usize| i >= 3 && p.v[i - 3..i].iter().all(|v| v.abs() <= th.v_move);
+            // first motion: the run must start at rest, and the motion leave rest (not
+            // reverse a motion the other way, where the force is no breakaway level)
             if p.v.iter().take(3).all(|v| v.abs() <= th.v_move) {
-                if let Some(&(i, _)) = m.first() {
+                if let Some(&(i, _)) = m.first().filter(|&&(i, _)| from_rest(i)) {
                     let o = onset(p, i, sg);
-                    first_motion[dir.index()].push(sg * net(p, o) - bump_at(p, o));
+                    first_motion[dir.index()].push(level(o, sg));
+                    first_iv[dir.index()].push(onset_interval(p, o, &|k| level(k, sg)));
                 }
             }
             // every onset after at least 3 samples at rest
             for &(i, _) in &m {
-                if i >= 3 && p.v[i - 3..i].iter().all(|v| v.abs() <= th.v_move) {
+                if from_rest(i) {
                     let o = onset(p, i, sg);
-                    onsets[dir.index()].push(sg * net(p, o) - bump_at(p, o));
+                    onsets[dir.index()].push(onset_interval(p, o, &|k| level(k, sg)));
                 }
             }
         }
     }
-    (first_motion, onsets)
+    Onsets {
+        first_motion,
+        first: first_iv,
+        all: onsets,
+    }
+}
+
+/// The onsets of motion of the fitting runs, per direction (`[positive, negative]`).
+struct Onsets {
+    /// The net force at each run's first motion (magnitudes) [force units].
+    first_motion: [Vec<f64>; 2],
+    /// The bounds each first motion puts on the breakaway level.
+    first: [Vec<Interval>; 2],
+    /// The bounds of every onset after at least 3 samples at rest.
+    all: [Vec<Interval>; 2],
+}
+
+/// Samples before an onset whose net force bounds the breakaway from below: the axis held
+/// them at rest (at least 3, and the smoothing's half window: the onset found may lie a
+/// sample or two late, and then the last of them already carries a step's force).
+fn held_samples(p: &Prepared) -> usize {
+    p.w.max(3)
+}
+
+/// The bounds an onset at sample `o` puts on the breakaway level ([`breakaway`]): the least
+/// net force `level` over the [`held_samples`] before it (held at rest), and the largest over
+/// `o` and as many samples after it (the axis moves there; the onset found may lie a sample or
+/// two early, before a step) [force units]. An onset at the first sample bounds it only from
+/// above.
+fn onset_interval(p: &Prepared, o: usize, level: &dyn Fn(usize) -> f64) -> Interval {
+    let h = held_samples(p);
+    let hi = (o..=(o + h).min(p.run.x.len().saturating_sub(1)).max(o))
+        .map(level)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let lo = (o.saturating_sub(h)..o)
+        .map(level)
+        .fold(f64::INFINITY, f64::min);
+    Interval::new(if lo.is_finite() { lo } else { hi.min(0.0) }, hi)
 }
 
 /// The model's parameters from the final least squares `ls` with the dry levels `kin`
@@ -532,7 +605,7 @@ fn drive_params(
         delay_steps: 0,
         min: f64::NEG_INFINITY,
         max: f64::INFINITY,
-        stribeck_velocity: 0.0,
+        stribeck_velocity: if s.stiction { s.stribeck } else { 0.0 },
         load_friction: s.load,
         local_friction: match s.bump {
             Some(site) => LocalFriction::Bump {
@@ -558,13 +631,16 @@ struct LsFit {
 }
 
 /// Rows are `(F, a, shape, v, x)`. With `fixed_kinetic` the dry levels are moved to the
-/// left-hand side and only inertia, stiffness, viscous and offset are fitted.
+/// left-hand side and only inertia, stiffness, viscous and offset are fitted; with velocity
+/// weakening ([`Structure::stribeck`]) that dry level is the Stribeck blend of the fixed
+/// kinetic level and `breakaway` ([force units], `[positive, negative]`) at each row's velocity.
 fn ls_pass(
     rows: &[(f64, f64, f64, f64, f64)],
     s: &Structure,
     asym: bool,
     both: bool,
     fixed_kinetic: Option<[f64; 2]>,
+    breakaway: [f64; 2],
 ) -> Option<LsFit> {
     let mut cols: Vec<(Col, Vec<f64>)> = vec![(Col::Inertia, rows.iter().map(|r| r.1).collect())];
     if s.restoring {
@@ -605,10 +681,13 @@ fn ls_pass(
 
     let y: Vec<f64> = rows
         .iter()
-        .map(|r| match fixed_kinetic {
-            Some(k) if r.3 > 0.0 => r.0 - k[0],
-            Some(k) => r.0 + k[1],
-            None => r.0,
+        .map(|r| {
+            let g = s.stribeck_weight(r.3);
+            match fixed_kinetic {
+                Some(k) if r.3 > 0.0 => r.0 - (k[0] + (breakaway[0] - k[0]).max(0.0) * g),
+                Some(k) => r.0 + (k[1] + (breakaway[1] - k[1]).max(0.0) * g),
+                None => r.0,
+            }
         })
         .collect();
     // inertia floor: a thousandth of the force-to-acceleration scale of the sliding rows
@@ -748,9 +827,11 @@ pub fn bounded_ls(
     None
 }
 
-/// Onset level minus energy-balance kinetic friction of every slip of the fitting runs, per
-/// direction (magnitudes) [force units]. A slip is a motion (see [`motions`]) with rest
-/// before and after it.
+/// Onset level (the breakaway `brk` within the slip's [`onset_interval`]) minus
+/// energy-balance mean friction of every slip of the fitting runs, per
+/// direction (magnitudes) [force units], and each slip's mean Stribeck weight per distance
+/// ([`Structure::stribeck_weight`], 0 without velocity weakening) [1]. A slip is a motion
+/// (see [`motions`]) with rest before and after it.
 #[allow(clippy::too_many_arguments)]
 fn slip_gaps(
     fit: &[&Prepared],
@@ -761,8 +842,10 @@ fn slip_gaps(
     stiffness: f64,
     offset: f64,
     visc: [f64; 2],
-) -> [Vec<f64>; 2] {
+    brk: [f64; 2],
+) -> ([Vec<f64>; 2], [Vec<f64>; 2]) {
     let mut out: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
+    let mut weights: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
     for p in fit {
         let x = &p.run.x;
         let n = x.len();
@@ -785,20 +868,25 @@ fn slip_gaps(
                 if sg * dx_total <= 0.0 {
                     continue;
                 }
-                let (mut work, mut vdx) = (0.0, 0.0);
+                let (mut work, mut vdx, mut gdx) = (0.0, 0.0, 0.0);
                 for i in lo..hi {
                     let dx = x[i + 1] - x[i];
                     work += net(i) * dx;
                     vdx += p.v[i] * dx;
+                    gdx += s.stribeck_weight(p.v[i]) * dx;
                 }
                 let d = dir.index();
                 // mean friction magnitude over the slip, viscous part removed
                 let kinetic = sg * work / dx_total - sg * visc[d] * vdx / dx_total;
-                out[d].push(sg * net(a) - kinetic);
+                // the slip's onset level: the breakaway level moved into the bounds its onset
+                // puts on it (a step's onset is no level, only an upper bound)
+                let at_onset = onset_interval(p, a, &|k| sg * net(k)).clamp(brk[d]);
+                out[d].push(at_onset - kinetic);
+                weights[d].push(gdx / dx_total);
             }
         }
     }
-    out
+    (out, weights)
 }
 
 fn mean(v: &[f64]) -> f64 {

@@ -23,6 +23,7 @@
 //! 6. `report`: the report, and [`plots`]: measured vs simulated runs, residuals, stick/slip
 //!    marks, force vs velocity.
 
+pub mod breakaway;
 pub mod cause;
 mod checks;
 pub mod estimate;

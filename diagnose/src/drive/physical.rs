@@ -27,7 +27,7 @@ pub(super) fn physical(
                 )
             }
         }
-        Cause::Stiction => stiction(est),
+        Cause::Stiction | Cause::StribeckFriction => stiction(cause, est),
         Cause::DirectionAsymmetry => (true, None),
         Cause::ForceOffset if est.structure.asymmetric => {
             // With a dry level per direction a constant force o is exactly those levels
@@ -97,10 +97,10 @@ pub(super) fn physical(
     }
 }
 
-/// Stiction is named only when the mean gap between the onset level of the slips and their
-/// sliding friction exceeds the run-to-run scatter of the breakaway levels, over a sliding
-/// friction above 0.
-fn stiction(est: &Estimate) -> (bool, Option<String>) {
+/// Stiction, or velocity-weakening friction (`cause`), is named only when the mean gap between
+/// the onset level of the slips and their sliding friction exceeds the run-to-run scatter of
+/// the breakaway levels, over a sliding friction above 0.
+fn stiction(cause: Cause, est: &Estimate) -> (bool, Option<String>) {
     let p = &est.params;
     // named only when the mean gap between the onset level of the slips and their
     // sliding friction exceeds the run-to-run scatter of the breakaway levels
@@ -132,7 +132,7 @@ fn stiction(est: &Estimate) -> (bool, Option<String>) {
         (
             false,
             Some(format!(
-                "stiction not named: the sliding friction is at 0 (+{:.4} / -{:.4}), so static over kinetic friction is undefined",
+                "{cause} not named: the sliding friction is at 0 (+{:.4} / -{:.4}), so static over kinetic friction is undefined",
                 p.kinetic_pos, p.kinetic_neg
             )),
         )
@@ -142,7 +142,7 @@ fn stiction(est: &Estimate) -> (bool, Option<String>) {
         (
             false,
             Some(format!(
-                "stiction not named: static and kinetic friction are equal within the run-to-run scatter ({})",
+                "{cause} not named: static and kinetic friction are equal within the run-to-run scatter ({})",
                 why.join("; ")
             )),
         )

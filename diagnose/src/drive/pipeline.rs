@@ -65,6 +65,7 @@ pub fn diagnose_drive(
         saturation: 0.0,
         load: 0.0,
         bump: None,
+        stribeck: 0.0,
     };
     let base = ex.baseline(base_s)?;
     let own_floor = super::floor::own_log(
@@ -84,6 +85,7 @@ pub fn diagnose_drive(
         ex: &ex,
         umax: ctx.umax,
         sat_grid: &sat_grid,
+        stribeck_grid: &super::trial::stribeck_grid(fit, &th),
         delay_grid: &super::grid::delay_grid(ctx.dt, shortest),
         dt: ctx.dt,
         bump_guess: &|e| super::local::guess(e, fit, &th, info.motion).map(|g| g.0),

@@ -205,6 +205,7 @@ mod tests {
                 saturation: 0.0,
                 load: 0.0,
                 bump: None,
+                stribeck: 0.0,
             },
             flags: Vec::new(),
             first_motion: [Vec::new(), Vec::new()],

@@ -169,6 +169,7 @@ pub(super) fn extra_parameters(cause: Cause) -> usize {
         Cause::LocalizedFriction => 3,
         Cause::PayloadMass => 1,
         Cause::LoadDependentFriction => 1,
+        Cause::StribeckFriction => 3,
     }
 }
 
@@ -209,6 +210,13 @@ pub(super) fn cause_parameters(cause: Cause, est: &Estimate, dt: f64) -> BTreeMa
         }
         Cause::LoadDependentFriction => {
             m.insert("mu".into(), p.load_friction);
+        }
+        Cause::StribeckFriction => {
+            m.insert("static_pos".into(), p.breakaway_pos);
+            m.insert("static_neg".into(), p.breakaway_neg);
+            m.insert("sliding_pos".into(), p.kinetic_pos);
+            m.insert("sliding_neg".into(), p.kinetic_neg);
+            m.insert("stribeck_velocity".into(), p.stribeck_velocity);
         }
         Cause::LocalizedFriction => {
             if let crane_model::drive::LocalFriction::Bump {

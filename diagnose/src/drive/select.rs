@@ -187,6 +187,8 @@ pub(super) fn forward(ctx: &Context<'_>, search: &Search<'_>) -> Selection {
         }
         let small = sel.current.selection <= NONE_LEVEL;
         let mut best: Option<(Cause, Scored)> = None;
+        // stiction's held-out NMAE this round, if it was supported (see `prefer_stiction`)
+        let mut stiction_sel: Option<Scored> = None;
         for cause in DRIVE_CAUSES {
             if used.contains(&cause) {
                 continue;
@@ -215,6 +217,9 @@ pub(super) fn forward(ctx: &Context<'_>, search: &Search<'_>) -> Selection {
             if let Some(n) = j.oe_note {
                 sel.notes.insert(cause, n);
             }
+            if j.supported && cause == Cause::Stiction {
+                stiction_sel = Some(j.scored.clone());
+            }
             if j.supported
                 && best
                     .as_ref()
@@ -223,7 +228,7 @@ pub(super) fn forward(ctx: &Context<'_>, search: &Search<'_>) -> Selection {
                 best = Some((cause, j.scored));
             }
         }
-        let Some((cause, scored)) = best else {
+        let Some((cause, scored)) = prefer_stiction(best, stiction_sel) else {
             break;
         };
         let f = finding(ctx, cause, &sel, &scored, refined_cuts.get(&cause));
@@ -232,6 +237,23 @@ pub(super) fn forward(ctx: &Context<'_>, search: &Search<'_>) -> Selection {
         sel.current = scored;
     }
     sel
+}
+
+/// Velocity weakening is stiction plus one parameter (the Stribeck velocity; at its lowest
+/// value it is stiction): it is named over supported stiction only when it cuts stiction's
+/// held-out NMAE by [`MIN_GAIN`] too, as any added parameter must; otherwise stiction is.
+fn prefer_stiction(
+    best: Option<(Cause, Scored)>,
+    stiction: Option<Scored>,
+) -> Option<(Cause, Scored)> {
+    match (best, stiction) {
+        (Some((Cause::StribeckFriction, s)), Some(st))
+            if s.selection > (1.0 - MIN_GAIN) * st.selection =>
+        {
+            Some((Cause::Stiction, st))
+        }
+        (best, _) => best,
+    }
 }
 
 /// Whether the selection stops before a round, noting why when no cause was tried.

@@ -20,6 +20,14 @@ pub const SATURATION_QUANTILES: [f64; 11] =
 /// Load shares `mu` tried for load-dependent friction (every dry level plus `mu |F|`): from
 /// a fine screw or gear (a few %) to a worm gear near self-locking.
 pub const LOAD_GRID: [f64; 8] = [0.01, 0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.8];
+/// Stribeck velocities tried: this many, geometrically spaced from the motion threshold
+/// `v_move` (a weakening faster than that is stiction: the friction drops before the motion is
+/// seen) to the [`STRIBECK_TOP_QUANTILE`] of |v| over the fitting runs' moving samples (a
+/// weakening slower than that never ends within the motions); the best is refined between
+/// its neighbours by [`GRID_REFINE`] golden-section steps.
+pub const STRIBECK_POINTS: usize = 9;
+/// The quantile of the moving |v| that tops the Stribeck grid.
+pub const STRIBECK_TOP_QUANTILE: f64 = 0.9;
 /// Golden-section steps refining the best dead band, saturation or load-share grid value (on the
 /// fitting runs): the bracket shrinks to 0.618^8, under 2 % of the grid step.
 pub const GRID_REFINE: usize = 10;
@@ -32,6 +40,8 @@ pub(super) struct Search<'a> {
     pub umax: f64,
     /// Saturation levels tried ([`saturation_grid`]).
     pub sat_grid: &'a [f64],
+    /// Stribeck velocities tried [m/s or rad/s] ([`stribeck_grid`]), ascending.
+    pub stribeck_grid: &'a [f64],
     /// Delays tried [samples] ([`super::grid::delay_grid`]), ascending.
     pub delay_grid: &'a [usize],
     /// The fitting runs' sample period [s] (the shortest, if they differ).
@@ -69,6 +79,29 @@ pub(super) fn saturation_grid(fit: &[&Prepared], th: &Thresholds, umax: f64) -> 
     grid
 }
 
+/// The Stribeck velocities tried [m/s or rad/s]: [`STRIBECK_POINTS`] from `v_move` to the
+/// [`STRIBECK_TOP_QUANTILE`] of |v| over the fitting runs' moving samples, geometric; empty
+/// when that range is empty (no motion faster than the threshold).
+pub(super) fn stribeck_grid(fit: &[&Prepared], th: &Thresholds) -> Vec<f64> {
+    let mut a: Vec<f64> = fit
+        .iter()
+        .flat_map(|p| p.v.iter().map(|v| v.abs()))
+        .filter(|v| v.is_finite() && *v > th.v_move)
+        .collect();
+    if a.is_empty() {
+        return Vec::new();
+    }
+    a.sort_by(f64::total_cmp);
+    let top = a[((STRIBECK_TOP_QUANTILE * (a.len() - 1) as f64).round() as usize).min(a.len() - 1)];
+    if top.is_nan() || top <= th.v_move {
+        return Vec::new();
+    }
+    let r = (top / th.v_move).powf(1.0 / (STRIBECK_POINTS - 1) as f64);
+    (0..STRIBECK_POINTS)
+        .map(|k| th.v_move * r.powi(k as i32))
+        .collect()
+}
+
 /// Fits and scores the current structure plus one cause; for grid-searched causes the best
 /// grid point, with a note when it lies at the grid's edge.
 pub(super) fn try_cause(
@@ -95,6 +128,27 @@ pub(super) fn try_cause(
             stiction: true,
             ..s
         }),
+        Cause::StribeckFriction if !s.stiction && !search.stribeck_grid.is_empty() => {
+            // stiction whose friction falls off with speed: the velocity is chosen on the
+            // fitting runs' simulation (the sliding samples alone hardly see it: most slide
+            // far above it)
+            let grid = search.stribeck_grid;
+            let b = super::grid::continuous(grid, GRID_REFINE, |vs| {
+                fitted(Structure {
+                    stiction: true,
+                    stribeck: vs,
+                    ..s
+                })
+            })?;
+            let edge = b.at_edge(grid, true).then(|| {
+                if b.at == grid[0] {
+                    format!("Stribeck velocity at the lowest value tried ({:.4}, the motion threshold: the friction falls off before the motion is seen, which is stiction; grid edge)", b.at)
+                } else {
+                    format!("Stribeck velocity at the highest value tried ({:.4}, the {} quantile of the moving |v|: the friction does not fall off within the motions; grid edge)", b.at, STRIBECK_TOP_QUANTILE)
+                }
+            });
+            ex.score(b.value).ok().map(|r| (r, edge))
+        }
         Cause::DirectionAsymmetry if !s.asymmetric => one(Structure {
             asymmetric: true,
             ..s
