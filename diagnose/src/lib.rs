@@ -36,6 +36,8 @@
 //! | rotary, encoder reversed | position counts against the input | `unexplained`, NMAE 2e5 % | error: "the recorded position moves against the input ... a sign is reversed" |
 //! | PD loop declared as `[controller]`, 1 kHz | nothing hidden | `input_delay` (1 sample) + dead band | `none` (and on 9 further input draws, which named a cause on 4 before the bootstrap rule) |
 //! | the same PD loop, the drive 3 samples late | 3-sample input delay | (not tried) | `input_delay` on all 9 draws (4 samples: the zero-order hold's one on top; 5 on one draw) |
+//! | the same PD loop, the drive 30 samples (30 ms) late | 30-sample input delay | `input_delay` at 12 samples on all 9 draws (the closed-loop grid stopped there) | `input_delay` on all 9 draws: 0.031 s (the hold's sample on top) on 7, 0.030 s on 2 |
+//! | a slower PD loop (kp 3 V/m, kd 0.5 V s/m) behind a 150 ms link, steps then 1 s at rest | 150-sample input delay (and the same rig without one) | `input_delay` at 12 samples on 8 draws, `unexplained` on one; without the delay nothing named | `input_delay` on all 9 draws: 0.151 s on 8, 0.150 s on one; without the delay nothing named on 9 of 9 |
 //! | linear, N, 1 kHz, logged from 0.35 s into each run (mid-motion) | nothing hidden | (added later) simulated from rest: `unexplained`, 20.1 % | `none`; 0.20 %: held-out runs simulated from their first velocity when they start moving |
 //!
 //! What changed (each general, none tuned to a rig): the derivative window follows the

@@ -64,6 +64,15 @@ impl BaseColumns {
             theta: th,
         })
     }
+
+    /// The fitting sum of squared force residuals [N^2] of the baseline's columns alone with
+    /// target `yf` [N] (what [`Self::eval`] gives as `sse_f` without extra columns, the
+    /// held-out rows not scored); `None` when the least squares fail.
+    pub(super) fn fit_sse(&self, yf: &[f64]) -> Option<f64> {
+        let cf: Vec<&[f64]> = self.fit.iter().map(|c| c.as_slice()).collect();
+        let th = ls(&cf, yf)?;
+        Some(sse(&cf, &th, yf))
+    }
 }
 
 /// The fitted baseline and the figures every later stage measures against.

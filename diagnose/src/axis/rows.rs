@@ -1,7 +1,8 @@
 //! The inverse-dynamics rows of a part of the runs (the fitting or the held-out part): each
 //! run's moving stretches filtered, differentiated and decimated as the EMPS benchmark's
-//! IDIM-LS does ([`crane_ident::emps::process`]), with the force delayed by 0..=[`MAXD`]
-//! samples and the undecimated force beside them.
+//! IDIM-LS does ([`crane_ident::emps::process`]), with the runs' force at the full rate
+//! beside them: a delayed force ([`Part::delayed`]) and a dead band's force are built from it
+//! on demand.
 
 use crane_ident::data::AxisRun;
 use crane_ident::emps::{process, IdimOptions};
@@ -12,7 +13,8 @@ use crane_ident::signal::decimate;
 /// axis: the input times the declared gain, the input itself without one); signs as
 /// recorded. The kinematic columns are at the full rate (the first `drop_start` samples of
 /// every segment dropped) and are decimated when a regressor is built from them ([`dec`]);
-/// the force columns are decimated already.
+/// the force `f` is decimated already, a delayed force is decimated when it is built
+/// ([`Part::delayed`]).
 #[derive(Default, Clone)]
 pub(super) struct Part {
     /// Filtered position [m or rad], full rate.
@@ -24,17 +26,66 @@ pub(super) struct Part {
     pub(super) a: Vec<f64>,
     /// Force [N], decimated: the target of the least squares.
     pub(super) f: Vec<f64>,
-    /// force delayed by m samples, m = 0..MAXD (index m) [N], decimated
-    pub(super) fd: Vec<Vec<f64>>,
-    /// force before decimation (for the dead band) [N], full rate
-    pub(super) u: Vec<f64>,
+    /// Force before decimation [N], full rate: every appended run share whole (its rests
+    /// and each segment's dropped start included: a delayed force reaches back into them),
+    /// shares concatenated. Only shares with a moving segment are kept.
+    raw: Vec<f64>,
+    /// Where every appended run share with a moving segment lies in `raw` [samples].
+    shares: Vec<std::ops::Range<usize>>,
+    /// Every appended run segment (a moving part of a share), in order.
+    pieces: Vec<Piece>,
     /// full-rate length of every appended run segment: columns are decimated run by run,
     /// like the force, so they stay aligned whatever the run lengths
     pub(super) lens: Vec<usize>,
 }
 
-/// Longest input delay tried [samples]: [`Part::fd`] holds the force delayed by 0..=`MAXD`.
-pub(super) const MAXD: usize = 12;
+/// One appended run segment of a [`Part`]: a moving part of a run share.
+#[derive(Clone, Debug)]
+struct Piece {
+    /// Its force samples in [`Part::raw`], its dropped start included [samples].
+    range: std::ops::Range<usize>,
+    /// First sample of its run share in [`Part::raw`]: how far back a delay may reach.
+    floor: usize,
+    /// Samples dropped at its start (its rows begin there) [samples].
+    drop: usize,
+    /// Decimation factor of its rows.
+    r: usize,
+}
+
+impl Part {
+    /// The force [N] delayed by `m` samples, decimated like the rows, segment by segment:
+    /// the row at sample `k` of a segment carries the force recorded at `k - m`, before the
+    /// segment if need be (in its run share: a rest cut out of the rows, the dropped start),
+    /// the share's first sample where `k - m` lies before the share. `delayed(0)` is `f`; for
+    /// `m <= drop_start` (49 samples) every `k - m` lies in the segment, exactly as when the
+    /// delayed forces were computed per segment.
+    pub(super) fn delayed(&self, m: usize) -> Vec<f64> {
+        let mut out = Vec::with_capacity(self.f.len());
+        for pc in &self.pieces {
+            let d: Vec<f64> = (pc.range.start + pc.drop..pc.range.end)
+                .map(|i| self.raw[i.saturating_sub(m).max(pc.floor)])
+                .collect();
+            out.extend(decimate(&d, pc.r));
+        }
+        out
+    }
+
+    /// The force of the rows [N], full rate (every segment without its dropped start),
+    /// segments concatenated: what [`dec`] decimates.
+    pub(super) fn force_rows(&self) -> impl Iterator<Item = f64> + '_ {
+        self.pieces.iter().flat_map(|pc| {
+            self.raw[pc.range.start + pc.drop..pc.range.end]
+                .iter()
+                .copied()
+        })
+    }
+
+    /// Length of the shortest run share with rows [samples, full rate] (0 without one): a
+    /// whole run, or a time split's share of one. A delay reaches back within it only.
+    pub(super) fn shortest_share(&self) -> usize {
+        self.shares.iter().map(|s| s.len()).min().unwrap_or(0)
+    }
+}
 
 /// Shortest stretch at rest that is cut out of the inverse-dynamics rows [s]: far longer than
 /// a reversal takes (EMPS has none over 7 ms), so only an axis that really holds still is cut.
@@ -101,19 +152,38 @@ fn moving_parts(
     parts
 }
 
-/// Appends the moving parts ([`moving_parts`]) of `run[range]` to `part`.
+/// Appends the moving parts ([`moving_parts`]) of `run[range]` to `part`, with the force of
+/// the whole share (for [`Part::delayed`]) when there is one.
 pub(super) fn append(
     part: &mut Part,
     run: &AxisRun,
     range: std::ops::Range<usize>,
     opt: &IdimOptions,
 ) {
-    for piece in moving_parts(run, range, opt) {
-        append_part(part, run, piece, opt);
+    let pieces = moving_parts(run, range.clone(), opt);
+    if pieces.is_empty() {
+        return;
+    }
+    let floor = part.raw.len();
+    part.raw.extend(&run.slice(range.clone()).force);
+    part.shares.push(floor..part.raw.len());
+    for piece in pieces {
+        // the piece's first sample in `raw`
+        let at = floor + (piece.start - range.start);
+        append_part(part, run, piece, opt, at, floor);
     }
 }
 
-fn append_part(part: &mut Part, run: &AxisRun, range: std::ops::Range<usize>, opt: &IdimOptions) {
+/// Appends one moving part `range` of `run`, whose force starts at `raw[at]`, in the share
+/// starting at `raw[floor]`.
+fn append_part(
+    part: &mut Part,
+    run: &AxisRun,
+    range: std::ops::Range<usize>,
+    opt: &IdimOptions,
+    at: usize,
+    floor: usize,
+) {
     let sub = run.slice(range);
     let p = process(&sub, opt);
     let r = opt.decimation;
@@ -121,17 +191,12 @@ fn append_part(part: &mut Part, run: &AxisRun, range: std::ops::Range<usize>, op
     part.v.extend(&p.qd);
     part.a.extend(&p.qdd);
     part.f.extend(decimate(&p.force, r));
-    if part.fd.is_empty() {
-        part.fd = vec![Vec::new(); MAXD + 1];
-    }
-    let s = opt.drop_start.min(sub.force.len());
-    for m in 0..=MAXD {
-        let d: Vec<f64> = (s..sub.force.len())
-            .map(|k| sub.force[k.saturating_sub(m)])
-            .collect();
-        part.fd[m].extend(decimate(&d, r));
-    }
-    part.u.extend(&sub.force[s..]);
+    part.pieces.push(Piece {
+        range: at..at + sub.force.len(),
+        floor,
+        drop: opt.drop_start.min(sub.force.len()),
+        r,
+    });
     part.lens.push(p.q.len());
 }
 
