@@ -15,7 +15,7 @@
 //!
 //! `tests/strangers.rs` synthesises 15 plausible single-axis rigs with the project's drive
 //! model, writes each as a data set (CSV + `dataset.toml`) and diagnoses it end to end
-//! (`cargo test -p crane-diagnose --test strangers -- --nocapture`, about 5 s). Before: the
+//! (`cargo test -p crane-diagnose --release --test strangers -- --nocapture`, about 35 s). Before: the
 //! pipeline as built against EMPS and CICESE (commit `d62ac5e`); after: this version. NMAE is
 //! the held-out simulated position NMAE baseline -> final model; `J` the fitted inertia.
 //!
@@ -38,6 +38,7 @@
 //! | the same PD loop, the drive 3 samples late | 3-sample input delay | (not tried) | `input_delay` on all 9 draws (4 samples: the zero-order hold's one on top; 5 on one draw) |
 //! | the same PD loop, the drive 30 samples (30 ms) late | 30-sample input delay | `input_delay` at 12 samples on all 9 draws (the closed-loop grid stopped there) | `input_delay` on all 9 draws: 0.031 s (the hold's sample on top) on 7, 0.030 s on 2 |
 //! | a slower PD loop (kp 3 V/m, kd 0.5 V s/m) behind a 150 ms link, steps then 1 s at rest | 150-sample input delay (and the same rig without one) | `input_delay` at 12 samples on 8 draws, `unexplained` on one; without the delay nothing named | `input_delay` on all 9 draws: 0.151 s on 8, 0.150 s on one; without the delay nothing named on 9 of 9 |
+//! | linear, N, 1 kHz, slow ramps that stick and slip | Stribeck weakening: breakaway 6 N falling to 3 N sliding over 0.03 m/s | (added later) | `stribeck_friction`: static 6.14 / 6.22 N, sliding 3.01 / 3.03 N, velocity 0.020 m/s; 28.0 -> 0.97 % |
 //! | linear, N, 1 kHz, logged from 0.35 s into each run (mid-motion) | nothing hidden | (added later) simulated from rest: `unexplained`, 20.1 % | `none`; 0.20 %: held-out runs simulated from their first velocity when they start moving |
 //!
 //! What changed (each general, none tuned to a rig): the derivative window follows the

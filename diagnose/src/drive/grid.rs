@@ -1,5 +1,7 @@
-//! One-parameter searches of the grid-searched input causes (dead band, saturation, delay):
-//! the best point of a grid by the fitting runs' simulated error, refined between its
+//! One-parameter searches of the grid-searched causes (dead band, saturation, load share,
+//! Stribeck velocity, delay): the best point of a grid by the fitting runs' error (their
+//! simulated NMAE on open-loop data; the closed-loop path, `axis/input.rs`, searches its delay
+//! with the same grid and [`integer`] by the fitting squared error), refined between its
 //! neighbours, and whether the result sits at the grid's edge.
 //!
 //! A value at the edge of what was tried is no finding: the best value may lie beyond it
