@@ -333,6 +333,16 @@ impl Monitor {
         self.period
     }
 
+    /// Whether the monitor judges the friction map of `axis` now: its residual is within its
+    /// learned band and no `model_mismatch` of it stands (otherwise the map measures the model's
+    /// error, not the friction, and no friction alarm of the axis is decided). `false` for an
+    /// axis without a map (the rope).
+    pub fn judging(&self, axis: Axis) -> bool {
+        AXES.iter()
+            .position(|a| *a == axis)
+            .is_some_and(|i| !self.untracked(i))
+    }
+
     /// One control period, after the observer's update: `applied` are the voltages [V] the
     /// drivers applied during the period the observer just predicted. Returns an alarm raised
     /// in this period or earlier and not yet returned (at most one per call).

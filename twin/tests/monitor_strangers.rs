@@ -1,0 +1,403 @@
+//! The friction monitor on a plant it was not built on (issue 21): `stranger_crane/`, an
+//! independent 3-D crane written from the physics spec (`MODEL.md`) by a helper that never read
+//! this project's model, twin or monitor. Its own integrator and exact sticking, its own
+//! position-dependent friction (a waviness, not the model's polynomials), a 1.5 ms drive lag,
+//! PWM steps, ±1-count encoder noise at 1/10, per-seed parameters 3-8 % off nominal. The
+//! operator below is this file's own too (moves of one, two or three drives, speeds and
+//! dwells unlike the rig's). The twin runs with the nominal parameters, as on a real rig.
+//!
+//! One seed of each scenario runs in CI; `STRANGER_SEEDS=N` runs seeds `1..=N` and prints the
+//! table of `twin/README.md` (`cargo test --release -p crane-twin --test monitor_strangers --
+//! --nocapture`); `STRANGER_ONLY=TEXT` runs the scenarios whose name contains TEXT, and
+//! `STRANGER_PRINT=1` prints every alarm and the share of periods in which X's map was judged.
+#[path = "support/monitor_rig.rs"]
+mod rig;
+mod stranger_crane;
+
+use crane_model::{Axis, Params, State};
+use crane_twin::logic::control::{Controller, Io, IoError, LoopConfig, Move, Trajectory};
+use crane_twin::logic::monitor::alarm::Alarm;
+use crane_twin::logic::monitor::{Monitor, Settings};
+use rig::Fault as RigFault;
+use stranger_crane::{Config, Fault, StrangerCrane};
+
+/// When a fault appears [s].
+const ONSET: f64 = 600.0;
+
+/// The stranger plant behind the twin's driver interface.
+struct Board {
+    plant: StrangerCrane,
+}
+
+impl Io for Board {
+    fn read(&mut self) -> [Result<i32, IoError>; 5] {
+        self.plant.counts().map(Ok)
+    }
+    fn write(&mut self, u: [f64; 3]) -> Result<[f64; 3], IoError> {
+        // the driver's PWM: 4200 steps over 12 V, saturated (the plant quantises the same way)
+        let q = u.map(|v| {
+            if v.is_finite() {
+                (v.clamp(-12.0, 12.0) * 350.0).round() / 350.0
+            } else {
+                0.0
+            }
+        });
+        self.plant.apply(q);
+        Ok(q)
+    }
+    fn wait(&mut self) {
+        self.plant.step();
+    }
+}
+
+/// A small xorshift for the operator (its own, not the rig's).
+struct Dice(u64);
+
+impl Dice {
+    fn unit(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.unit()
+    }
+}
+
+/// An operator unlike the rig's: a move drives one, two or all three drives (a third each),
+/// at 0.12-0.30 m/s peak, dwells 0.5-4 s, the rope changed in one move of four.
+struct Operator {
+    dice: Dice,
+    from: [f64; 3],
+    current: Move,
+}
+
+impl Operator {
+    fn new(seed: u64) -> Self {
+        let start = [0.25, 0.30, 0.35];
+        Operator {
+            dice: Dice(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1),
+            from: start,
+            current: Move {
+                start: 0.0,
+                duration: 1.0,
+                to: start,
+            },
+        }
+    }
+    fn next(&mut self, t: f64) {
+        let d = &mut self.dice;
+        let mut to = self.current.to;
+        let which = d.unit();
+        if which < 1.0 / 3.0 {
+            to[0] = d.range(0.03, 0.47);
+        } else if which < 2.0 / 3.0 {
+            to[0] = d.range(0.03, 0.47);
+            to[1] = d.range(0.03, 0.59);
+        } else {
+            to[1] = d.range(0.03, 0.59);
+        }
+        if d.unit() < 0.25 {
+            to[2] = d.range(0.25, 0.50);
+        }
+        let speed = d.range(0.12, 0.30);
+        let dist = to
+            .iter()
+            .zip(self.current.to)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        let dwell = d.range(0.5, 4.0);
+        self.from = self.current.to;
+        self.current = Move {
+            start: t + dwell,
+            duration: (1.875 * dist / speed).max(0.8),
+            to,
+        };
+    }
+    fn reference(&mut self, t: f64) -> Trajectory<'_> {
+        if t >= self.current.start + self.current.duration {
+            self.next(t);
+        }
+        Trajectory {
+            from: self.from,
+            moves: core::slice::from_ref(&self.current),
+        }
+    }
+}
+
+/// What a run gave: alarms with their time, and the passes over the bump's centre.
+struct Outcome {
+    alarms: Vec<(f64, Alarm)>,
+    passes: Vec<f64>,
+    /// Periods in which the monitor judged X's map, and all periods, before and after the
+    /// onset.
+    judged: [[u64; 2]; 2],
+}
+
+/// Runs the f64 twin and the monitor (default settings) against the stranger plant.
+fn run(fault: Fault, seed: u64, duration: f64) -> Outcome {
+    let cfg = LoopConfig::default();
+    let mut io = Board {
+        plant: StrangerCrane::new(Config {
+            seed,
+            fault,
+            onset: ONSET,
+            period: cfg.period,
+        }),
+    };
+    let q = io.plant.truth();
+    let init = State {
+        q: [q[0], q[1], q[2], q[3], q[4]],
+        qd: [0.0; 5],
+    };
+    let mut ctrl =
+        Controller::<f64>::new(&Params::default(), init, &cfg).expect("nominal parameters");
+    let mut monitor = Monitor::new(ctrl.observer(), Settings::for_loop(&cfg));
+    let mut op = Operator::new(seed);
+    let bump = match fault {
+        Fault::Bump { center, .. } => Some(center),
+        _ => None,
+    };
+    let mut out = Outcome {
+        alarms: Vec::new(),
+        passes: Vec::new(),
+        judged: [[0; 2]; 2],
+    };
+    let mut last_x = q[0];
+    for k in 0..(duration / cfg.period) as u64 {
+        let t = k as f64 * cfg.period;
+        let r = op.reference(t).at::<f64>(t);
+        let p = ctrl.run_period(&mut io, &r);
+        if let Some(a) = monitor.update(ctrl.observer(), p.predicted) {
+            out.alarms.push((t, a));
+        }
+        let after = usize::from(t >= ONSET);
+        out.judged[after][0] += u64::from(monitor.judging(Axis::X));
+        out.judged[after][1] += 1;
+        if let Some(c) = bump {
+            let x = io.plant.truth()[0];
+            if (last_x - c) * (x - c) <= 0.0 && last_x != x {
+                out.passes.push(t);
+            }
+            last_x = x;
+        }
+        io.wait();
+    }
+    out
+}
+
+/// The rig's judgement of an alarm, for the stranger's fault.
+fn expected(fault: Fault, a: &Alarm) -> bool {
+    let f = match fault {
+        Fault::Clean => RigFault::Clean,
+        Fault::DryFriction { factor } => RigFault::DryFriction { factor },
+        Fault::Bump {
+            center,
+            width,
+            amplitude,
+        } => RigFault::Bump {
+            center,
+            width,
+            amplitude,
+        },
+        Fault::Stiction { ratio } => RigFault::Stiction { ratio },
+        Fault::SlowDrift { per_hour } => RigFault::SlowDrift { per_hour },
+        Fault::Payload { mass } => RigFault::Payload { mass },
+    };
+    rig::expected(&f, a)
+}
+
+/// One scenario: its fault, the run's length [s] and the detection bound after the onset [s]
+/// (`None`: no alarm is expected).
+struct Scenario {
+    name: &'static str,
+    fault: Fault,
+    duration: f64,
+    bound: Option<f64>,
+}
+
+fn scenarios() -> Vec<Scenario> {
+    vec![
+        Scenario {
+            name: "clean",
+            fault: Fault::Clean,
+            duration: 3600.0,
+            bound: None,
+        },
+        Scenario {
+            name: "dry friction +30 % at 600 s",
+            fault: Fault::DryFriction { factor: 1.3 },
+            duration: 700.0,
+            bound: Some(30.0),
+        },
+        Scenario {
+            name: "1 N bump at x = 0.31 m at 600 s",
+            fault: Fault::Bump {
+                center: 0.31,
+                width: 0.015,
+                amplitude: 1.0,
+            },
+            duration: 900.0,
+            bound: Some(300.0),
+        },
+        Scenario {
+            name: "stiction ratio 1.0 -> 1.8 at 600 s",
+            fault: Fault::Stiction { ratio: 1.8 },
+            duration: 900.0,
+            bound: Some(300.0),
+        },
+        Scenario {
+            name: "dry friction +5 %/h from 600 s",
+            fault: Fault::SlowDrift { per_hour: 0.05 },
+            duration: 3600.0,
+            bound: None,
+        },
+    ]
+}
+
+/// One scenario judged: the first expected alarm's delay after the onset [s] (if any), the
+/// passes over the bump before it, and the alarms not expected.
+struct Judged {
+    delay: Option<f64>,
+    passes: usize,
+    other: Vec<(f64, Alarm)>,
+}
+
+fn judge(s: &Scenario, o: &Outcome) -> Judged {
+    let first = o
+        .alarms
+        .iter()
+        .find(|(t, a)| *t >= ONSET && expected(s.fault, a))
+        .map(|(t, _)| *t);
+    Judged {
+        delay: first.map(|t| t - ONSET),
+        passes: first.map_or(0, |t| {
+            o.passes.iter().filter(|p| **p >= ONSET && **p <= t).count()
+        }),
+        other: o
+            .alarms
+            .iter()
+            .filter(|(_, a)| !expected(s.fault, a))
+            .copied()
+            .collect(),
+    }
+}
+
+fn seeds() -> u64 {
+    std::env::var("STRANGER_SEEDS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1)
+}
+
+/// Scenarios the monitor misses on this plant (measured: `twin/README.md`). They are
+/// asserted as misses: the test fails when one of them is met on every seed (then it belongs
+/// out of this list and into the README's table as met), as it fails on any other scenario
+/// not met.
+const KNOWN_MISSES: &[&str] = &[
+    "dry friction +30 % at 600 s",
+    "stiction ratio 1.0 -> 1.8 at 600 s",
+];
+
+/// How one scenario went over the seeds.
+#[derive(Default)]
+struct Tally {
+    hit: usize,
+    delays: Vec<f64>,
+    passes: Vec<usize>,
+    other: usize,
+    failures: Vec<String>,
+}
+
+fn tally(s: &Scenario, n: u64, print: bool) -> Tally {
+    let mut t = Tally::default();
+    for seed in 1..=n {
+        let o = run(s.fault, seed, s.duration);
+        if print {
+            let share = |k: usize| 100.0 * o.judged[k][0] as f64 / o.judged[k][1].max(1) as f64;
+            println!(
+                "  {} seed {seed}: X judged {:.1} % of the periods before the onset, {:.1} % after",
+                s.name,
+                share(0),
+                share(1)
+            );
+            for (at, a) in &o.alarms {
+                println!("  {} seed {seed} t {at:.1} {a:?}", s.name);
+            }
+        }
+        let j = judge(s, &o);
+        t.other += j.other.len();
+        if !j.other.is_empty() {
+            t.failures.push(format!(
+                "{} seed {seed}: alarms not expected {:?}",
+                s.name, j.other
+            ));
+        }
+        let Some(bound) = s.bound else { continue };
+        let bump = matches!(s.fault, Fault::Bump { .. });
+        match j.delay {
+            Some(d) if d <= bound && (!bump || j.passes <= 3) => {
+                t.hit += 1;
+                t.delays.push(d);
+                t.passes.push(j.passes);
+            }
+            _ => t.failures.push(format!(
+                "{} seed {seed}: not detected within {bound} s (delay {:?}, {} passes): {:?}",
+                s.name, j.delay, j.passes, o.alarms
+            )),
+        }
+    }
+    t.delays.sort_by(f64::total_cmp);
+    t.passes.sort_unstable();
+    t
+}
+
+/// The README's table row of a scenario.
+fn row(s: &Scenario, n: u64, t: &Tally) -> String {
+    let hours = n as f64 * s.duration / 3600.0;
+    let at = |v: &[f64], k: usize| v.get(k).map_or("-".into(), |x| format!("{x:.1} s"));
+    format!(
+        "| {} | {n} | {hours:.1} | {} | {} / {} | {} | {} ({:.2} per hour) |",
+        s.name,
+        s.bound.map_or("no alarm expected".into(), |b| format!(
+            "{} / {n} (<= {b} s)",
+            t.hit
+        )),
+        at(&t.delays, t.delays.len() / 2),
+        at(&t.delays, t.delays.len().wrapping_sub(1)),
+        t.passes
+            .get(t.passes.len() / 2)
+            .zip(t.passes.last())
+            .map_or("-".into(), |(m, x)| format!("{m} / {x}")),
+        t.other,
+        t.other as f64 / hours
+    )
+}
+
+#[test]
+fn the_monitor_on_an_independent_plant() {
+    let n = seeds();
+    let only = std::env::var("STRANGER_ONLY").ok();
+    let print = std::env::var_os("STRANGER_PRINT").is_some();
+    println!("| scenario | seeds | hours | detected (within bound) | delay median / max | passes median / max | other alarms |");
+    println!("|---|---|---|---|---|---|---|");
+    let mut failures = Vec::new();
+    for s in scenarios() {
+        if only.as_ref().is_some_and(|o| !s.name.contains(o.as_str())) {
+            continue;
+        }
+        let t = tally(&s, n, print);
+        println!("{}", row(&s, n, &t));
+        if KNOWN_MISSES.contains(&s.name) {
+            if t.failures.is_empty() {
+                failures.push(format!(
+                    "{}: a known miss is now met on all {n} seeds: take it out of KNOWN_MISSES and update twin/README.md",
+                    s.name
+                ));
+            }
+        } else {
+            failures.extend(t.failures);
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
