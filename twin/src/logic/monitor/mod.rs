@@ -333,6 +333,24 @@ impl Monitor {
         self.period
     }
 
+    /// Whether the monitor judges everything it watches: commissioning is over and, on every
+    /// watched axis and direction, the travel's level has learned its band
+    /// ([`Settings::level_learn`] moves over judged bins) and the breakaway ratio its spread
+    /// ([`Settings::restarts_learn`] restarts). Until then a change is learned as the reference,
+    /// not alarmed: a fault that begins before it goes unseen. How long that takes depends on
+    /// how the crane is operated (the moves' coverage of the travel), not on a clock.
+    pub fn ready(&self) -> bool {
+        self.commissioned()
+            && (0..AXES.len()).all(|i| {
+                (0..2).all(|dj| {
+                    self.checks[i][dj].level_n >= self.settings.level_learn
+                        && self.breakaway[i]
+                            .stats(dj, self.settings.restarts_learn)
+                            .is_some()
+                })
+            })
+    }
+
     /// Whether the monitor judges the friction map of `axis` now: its residual is within its
     /// learned band and no `model_mismatch` of it stands (otherwise the map measures the model's
     /// error, not the friction, and no friction alarm of the axis is decided). `false` for an
