@@ -392,6 +392,11 @@ pub struct FinalModel {
     /// Load share `mu` [1]: every dry level grows by `mu |F|` of the drive effort; 0: none.
     #[serde(default)]
     pub load_friction: f64,
+    /// Stribeck velocity [position unit / s]: a moving axis meets `kinetic + (breakaway -
+    /// kinetic) exp(-(v / stribeck_velocity)^2)`; 0: none (the dry level drops to the kinetic
+    /// one as soon as the axis moves).
+    #[serde(default)]
+    pub stribeck_velocity: f64,
     /// Localized friction: every dry level plus `A (1 - s^2)^2`, `s = (x - center) /
     /// half_width`, as `[center, half_width, A]` [position unit, position unit, force unit];
     /// `null`: none.

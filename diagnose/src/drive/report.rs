@@ -255,6 +255,7 @@ fn final_model(est: &Estimate, info: &DriveInfo, flags: &[String], dt: f64) -> F
         delay_samples: est.structure.delay,
         delay_s: est.structure.delay as f64 * dt,
         load_friction: p.load_friction,
+        stribeck_velocity: p.stribeck_velocity,
         bump: match p.local_friction {
             crane_model::drive::LocalFriction::Bump {
                 center,
