@@ -61,7 +61,10 @@ pub(super) fn final_model(ctx: &Context<'_>, sel: &Selection) -> Final {
 
 /// The verdict and its reason.
 pub(super) fn verdict(ctx: &Context<'_>, sel: &Selection, fin: &Final) -> (Verdict, String) {
-    let (verdict, reason) = decide(ctx, sel, fin);
+    let (verdict, mut reason) = decide(ctx, sel, fin);
+    if verdict == Verdict::None {
+        reason.push_str(&absorbed(ctx));
+    }
     if ctx.ex.moving.iter().any(|&m| m) {
         return (verdict, reason);
     }
@@ -76,6 +79,30 @@ pub(super) fn verdict(ctx: &Context<'_>, sel: &Selection, fin: &Final) -> (Verdi
     } else {
         (Verdict::Untested, what)
     }
+}
+
+/// What a `none` cannot rule out: a dead band and load-dependent friction act, while the drive
+/// pushes the motion, exactly as a higher dry level and a lower gain (`g (u - d sign u)` is `g u
+/// - g d sign v`; `F - mu |F|` is `(1 - mu) F`), which the baseline's levels and inertia take
+/// up. Only sliding samples whose input opposes the motion (the drive braking) tell them apart;
+/// their share of the fitting runs' sliding samples says how well the data could.
+fn absorbed(ctx: &Context<'_>) -> String {
+    let (mut sliding, mut braking) = (0usize, 0usize);
+    for p in &ctx.ex.fit {
+        for (u, v) in p.run.u.iter().zip(&p.v) {
+            if v.abs() > ctx.ex.th.v_slide {
+                sliding += 1;
+                braking += usize::from(u * v < 0.0);
+            }
+        }
+    }
+    if sliding == 0 {
+        return String::new();
+    }
+    format!(
+        "; the drive brakes (its input against the motion) on {:.1} % of the fitting runs' sliding samples, the only samples on which a dead band or a load-dependent friction differs from a higher dry level or a lower gain, which the baseline carries: on data that brake little, those two cannot be told apart from them",
+        100.0 * braking as f64 / sliding as f64
+    )
 }
 
 /// The verdict from the findings and the levels, before the check that the held-out runs
