@@ -81,11 +81,12 @@ pub(super) fn verdict(ctx: &Context<'_>, sel: &Selection, fin: &Final) -> (Verdi
     }
 }
 
-/// What a `none` cannot rule out: a dead band and load-dependent friction act, while the drive
-/// pushes the motion, exactly as a higher dry level and a lower gain (`g (u - d sign u)` is `g u
-/// - g d sign v`; `F - mu |F|` is `(1 - mu) F`), which the baseline's levels and inertia take
-/// up. Only sliding samples whose input opposes the motion (the drive braking) tell them apart;
-/// their share of the fitting runs' sliding samples says how well the data could.
+/// What a `none` cannot rule out: while the drive pushes the motion, a dead band acts exactly
+/// as a higher dry level (`g (u - d sign u)` equals `g u` less `g d sign v`) and load-dependent
+/// friction as a lower gain (`F - mu |F|` is `(1 - mu) F`), which the baseline's levels and
+/// inertia take up. Only sliding samples whose input opposes the motion (the drive braking)
+/// tell them apart; their share of the fitting runs' sliding samples says how well the data
+/// could.
 fn absorbed(ctx: &Context<'_>) -> String {
     let (mut sliding, mut braking) = (0usize, 0usize);
     for p in &ctx.ex.fit {
