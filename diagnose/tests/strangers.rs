@@ -998,13 +998,23 @@ fn strangers_rigs_are_diagnosed_honestly() {
 /// named a dead band, stiction, localized friction or a 2-sample delay).
 #[test]
 fn closed_loop_rig_names_nothing_over_many_draws() {
+    names_nothing_over_many_draws(pd_rig);
+}
+
+/// The closed-loop PD rig of draw `seed` (the one rig of [`rigs_drawn`] with a `[controller]`).
+fn pd_rig(seed: u64) -> Rig {
+    rigs_drawn(seed)
+        .into_iter()
+        .find(|r| r.pd.is_some())
+        .expect("a closed-loop rig")
+}
+
+/// Checks that `rig_of(seed)` (a rig hiding nothing) names no cause on each of 9 draws.
+fn names_nothing_over_many_draws(rig_of: impl Fn(u64) -> Rig) {
     let mut failures = Vec::new();
     for seed in 0..9u64 {
-        let rig = rigs_drawn(seed)
-            .into_iter()
-            .find(|r| r.pd.is_some())
-            .expect("a closed-loop rig");
-        assert!(rig.effects.is_empty(), "the PD rig hides nothing");
+        let rig = rig_of(seed);
+        assert!(rig.effects.is_empty(), "the rig hides nothing");
         let (line, failure, report) = run_rig(&rig, seed);
         println!("draw {seed}: {line}");
         failures.extend(failure.map(|f| format!("draw {seed}: {f}")));
@@ -1028,10 +1038,7 @@ fn closed_loop_rig_names_nothing_over_many_draws() {
 fn closed_loop_rig_finds_a_real_delay_over_many_draws() {
     let mut failures = Vec::new();
     for seed in 0..9u64 {
-        let mut rig = rigs_drawn(seed)
-            .into_iter()
-            .find(|r| r.pd.is_some())
-            .expect("a closed-loop rig");
+        let mut rig = pd_rig(seed);
         rig.name = "closed_loop_pd_delay3_V_1kHz";
         rig.delay = 3;
         rig.effects = &[Cause::InputDelay];
@@ -1096,10 +1103,7 @@ fn closed_loop_delay_found_over_many_draws(rig_of: impl Fn(u64) -> Rig) {
 #[test]
 fn closed_loop_rig_finds_a_30_ms_delay_over_many_draws() {
     closed_loop_delay_found_over_many_draws(|seed| {
-        let mut rig = rigs_drawn(seed)
-            .into_iter()
-            .find(|r| r.pd.is_some())
-            .expect("a closed-loop rig");
+        let mut rig = pd_rig(seed);
         rig.name = "closed_loop_pd_delay30_V_1kHz";
         rig.delay = 30;
         rig.effects = &[Cause::InputDelay];
@@ -1115,10 +1119,7 @@ fn closed_loop_rig_finds_a_30_ms_delay_over_many_draws() {
 /// end transient in the last rows, which put the delay 3 samples late on one draw); 1 kHz,
 /// volts with the gain known; light dry friction (0.5 N).
 fn slow_loop_rig(seed: u64, delay: usize) -> Rig {
-    let mut rig = rigs_drawn(seed)
-        .into_iter()
-        .find(|r| r.pd.is_some())
-        .expect("a closed-loop rig");
+    let mut rig = pd_rig(seed);
     let mut rng = Rng::new(seed ^ 0x51_0e);
     let dt = 1e-3;
     rig.name = "closed_loop_slow_pd_V_1kHz";
@@ -1154,21 +1155,7 @@ fn slow_closed_loop_rig_finds_a_150_ms_delay_over_many_draws() {
 /// to 0.25 s invents no delay).
 #[test]
 fn slow_closed_loop_rig_without_a_delay_names_nothing() {
-    let mut failures = Vec::new();
-    for seed in 0..9u64 {
-        let rig = slow_loop_rig(seed, 0);
-        let (line, failure, report) = run_rig(&rig, seed);
-        println!("draw {seed}: {line}");
-        failures.extend(failure.map(|f| format!("draw {seed}: {f}")));
-        let named: Vec<_> = report.iter().flat_map(|r| &r.findings).collect();
-        if !named.is_empty() {
-            failures.push(format!(
-                "draw {seed}: named {:?}",
-                named.iter().map(|f| f.cause).collect::<Vec<_>>()
-            ));
-        }
-    }
-    assert!(failures.is_empty(), "\n{}", failures.join("\n"));
+    names_nothing_over_many_draws(|seed| slow_loop_rig(seed, 0));
 }
 
 /// The generator's own check: every open-loop rig's truth, simulated from the data set as the
