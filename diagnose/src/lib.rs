@@ -361,6 +361,11 @@ fn drive_runs(
         },
         position_unit: first.position_unit.symbol().into(),
         force_unit: first.effort_unit().into(),
+        input_unit: first.input_unit.symbol().into(),
+        effort_per_input: match first.gain {
+            crane_ident::data::Gain::Known(g) if g > 0.0 && g.is_finite() => g,
+            _ => 1.0,
+        },
         symmetric: false,
         load_notes: axis
             .iter()

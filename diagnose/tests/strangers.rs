@@ -736,7 +736,7 @@ fn judge(rig: &Rig, r: &Report) -> Vec<String> {
     // the named parameters against the truth
     for f in &r.findings {
         let p = |k: &str| f.parameters.get(k).copied().unwrap_or(f64::NAN);
-        let fitted_deadband_v = p("deadband") / rig.truth.gain; // the runs' input is the force
+        let fitted_deadband_v = p("deadband"); // in the data set's input unit (V here)
         match f.cause {
             // (a closed loop's delay is judged by its own test, with the hold's sample)
             Cause::InputDelay

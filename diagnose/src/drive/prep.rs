@@ -150,10 +150,16 @@ pub fn window(runs: &[DriveRun]) -> usize {
     let mut dd: Vec<f64> = Vec::new();
     let mut quantum = f64::INFINITY;
     for r in runs {
-        for k in 1..r.x.len().saturating_sub(2) {
-            dd.push((r.x[k + 2] - 3.0 * r.x[k + 1] + 3.0 * r.x[k] - r.x[k - 1]).abs());
+        // the noise is the logged samples': in a channel refreshed every few rows the rows
+        // between fresh samples are [`unhold`]'s interpolation, whose tiny steps and zero
+        // third differences once set the noise 1000 times too low and kept an 11-sample
+        // window over 2 fresh positions (a 0.2 s delay on a 1 kHz log then read as an
+        // inertia at its floor)
+        let x = fresh(r);
+        for k in 1..x.len().saturating_sub(2) {
+            dd.push((x[k + 2] - 3.0 * x[k + 1] + 3.0 * x[k] - x[k - 1]).abs());
         }
-        for w in r.x.windows(2) {
+        for w in x.windows(2) {
             let d = (w[1] - w[0]).abs();
             if d > 0.0 {
                 quantum = quantum.min(d);
@@ -195,7 +201,10 @@ pub fn window(runs: &[DriveRun]) -> usize {
             if r.dt.is_nan() || r.dt <= 0.0 {
                 continue;
             }
-            noise += 2.0 * sigma / (s.sqrt() * r.dt * r.dt);
+            // rebuilt rows between fresh samples are not independent: the window holds
+            // `1 / refresh` as many independent positions, which multiplies the noise
+            // variance by `refresh`
+            noise += 2.0 * sigma * (r.refresh.max(1) as f64).sqrt() / (s.sqrt() * r.dt * r.dt);
             let (v, a) = derivatives_over(&r.x, r.dt, w);
             let v_peak = v.iter().fold(0.0f64, |p, v| p.max(v.abs()));
             for (vi, ai) in v.iter().zip(&a) {
@@ -213,6 +222,18 @@ pub fn window(runs: &[DriveRun]) -> usize {
         }
         w = next;
     }
+}
+
+/// The run's positions at its fresh rows (where [`DriveRun::read_at`] moves on: every row for
+/// a channel fresh on every row), as logged.
+fn fresh(r: &DriveRun) -> Vec<f64> {
+    if r.refresh <= 1 || r.read_at.len() != r.x.len() {
+        return r.x.clone();
+    }
+    (0..r.x.len())
+        .filter(|&k| k == 0 || r.read_at[k] != r.read_at[k - 1])
+        .map(|k| r.x[k])
+        .collect()
 }
 
 /// Velocity and acceleration by local quadratic least squares over `2 W + 1` samples
@@ -522,6 +543,43 @@ mod tests {
         // at rest it stays at the held value; unchanged without holds
         assert_eq!(x[79], held[79]);
         assert_eq!(unhold(&fresh, 1), fresh);
+    }
+
+    #[test]
+    fn a_refreshed_channel_gets_the_window_of_its_fresh_samples() {
+        // the same swing and encoder, logged at 2 kHz but refreshed every 5 rows (400 Hz of
+        // fresh positions), against the same swing logged at 400 Hz: the window must span
+        // about the time the 400 Hz log needs (the rows in between are interpolation; the
+        // window grows in steps of 1.5, hence 2 / 3 of it)
+        let fresh = swing(400.0, 1e-5);
+        let fine = swing(2000.0, 1e-5);
+        let held: Vec<f64> = (0..fine.x.len()).map(|k| fine.x[k - k % 5]).collect();
+        let mut r = run(fine.dt, unhold(&held, 5));
+        r.read_at = read_instants(&held, &r.read_at, 5);
+        r.refresh = 5;
+        let (w_fresh, w_held) = (window(&[fresh]), window(&[r.clone()]));
+        assert!(
+            w_held as f64 * r.dt >= 2.0 / 3.0 * w_fresh as f64 / 400.0,
+            "half window {w_held} rows at 2 kHz against {w_fresh} at 400 Hz"
+        );
+        // and it still finds the swing's acceleration on most samples (the rebuilt channel
+        // holds at the turning points, where the encoder changes less often than refreshed)
+        let (_, a) = derivatives_over(&r.x, r.dt, w_held);
+        let want = 0.1 * std::f64::consts::TAU.powi(2);
+        let mut err: Vec<f64> = a
+            .iter()
+            .enumerate()
+            .map(|(k, a)| {
+                let t = k as f64 * r.dt;
+                (a + want * (std::f64::consts::TAU * t).sin()).abs()
+            })
+            .collect();
+        err.sort_by(f64::total_cmp);
+        let p80 = err[err.len() * 4 / 5];
+        assert!(
+            p80 < 0.25 * want,
+            "80th percentile error {p80} vs peak {want}"
+        );
     }
 
     #[test]

@@ -173,8 +173,15 @@ pub(super) fn extra_parameters(cause: Cause) -> usize {
     }
 }
 
-/// A cause's parameters for the report; `dt` is the fitting runs' sample period [s].
-pub(super) fn cause_parameters(cause: Cause, est: &Estimate, dt: f64) -> BTreeMap<String, f64> {
+/// A cause's parameters for the report; `dt` is the fitting runs' sample period [s]. Forces
+/// are in `info.force_unit`; the dead band, which acts on the input, is in `info.input_unit`
+/// (`deadband`) and as the effort it withholds (`deadband_effort`, `info.force_unit`).
+pub(super) fn cause_parameters(
+    cause: Cause,
+    est: &Estimate,
+    dt: f64,
+    info: &DriveInfo,
+) -> BTreeMap<String, f64> {
     let p = &est.params;
     let mut m = BTreeMap::new();
     let ratio = |b: f64, k: f64| if k > 0.0 { b / k } else { 0.0 };
@@ -199,7 +206,11 @@ pub(super) fn cause_parameters(cause: Cause, est: &Estimate, dt: f64) -> BTreeMa
             m.insert("offset".into(), p.offset);
         }
         Cause::InputDeadzone => {
-            m.insert("deadband".into(), est.structure.deadband);
+            m.insert(
+                "deadband".into(),
+                est.structure.deadband / info.effort_per_input,
+            );
+            m.insert("deadband_effort".into(), est.structure.deadband);
         }
         Cause::InputDelay => {
             m.insert("delay_s".into(), est.structure.delay as f64 * dt);

@@ -134,6 +134,13 @@ impl<'a> Context<'a> {
         self.base.best_selection()
     }
 
+    /// Whether a held-out error [%] is within [`OWN_LOG_FACTOR`] times the log's own floor
+    /// (or the encoder's, if larger); false when there is no own floor.
+    pub fn within_own_floor(&self, e: f64) -> bool {
+        self.own_floor
+            .is_some_and(|f| e <= OWN_LOG_FACTOR * f.max(self.noise_floor))
+    }
+
     /// Whether a held-out error within [`NONE_LEVEL`] is also within [`OWN_LOG_FACTOR`] times
     /// the log's own floor (or the encoder's, if larger): only then is it `none`.
     pub fn consistent(&self, e: f64) -> bool {
@@ -202,7 +209,7 @@ pub(super) fn forward(ctx: &Context<'_>, search: &Search<'_>) -> Selection {
             sel.candidates.push(Candidate {
                 cause,
                 axis: "axis".into(),
-                parameters: cause_parameters(cause, &j.scored.est, ctx.dt),
+                parameters: cause_parameters(cause, &j.scored.est, ctx.dt, ctx.info),
                 score: (j.scored.selection / sel.current.selection).ln(),
                 force_delta_bic: 0.0,
                 supported: j.supported,
@@ -326,13 +333,16 @@ fn judge(
     // parameter (a delay, a dead band, a tiny spring) trades against: there a cause
     // must remove most of the error (SMALL_GAIN) and cut that of every held-out run
     // that moves
-    let every_run = ctx
-        .ex
-        .selection_runs
-        .iter()
-        .all(|&i| scored.per_run[i] < current.per_run[i]);
+    // (a run already within the log's own floor's scatter may move inside it: there the
+    // log, not the model, sets its error)
+    let every_run = ctx.ex.selection_runs.iter().all(|&i| {
+        scored.per_run[i] < current.per_run[i] || ctx.within_own_floor(scored.per_run[i])
+    });
     let mut supported = ok && gain >= MIN_GAIN && (!small || (every_run && gain >= SMALL_GAIN));
     let (mut refined_cut, mut oe_note) = (None, None);
+    if ok && !supported && gain >= MIN_GAIN {
+        oe_note = Some(small_note(ctx, cause, &scored, current, gain, every_run));
+    }
     // against the refined baseline, the candidate refined the same way: a cause must
     // cut the error whichever way the parameters are estimated (least squares against
     // least squares above, output error against output error here)
@@ -367,6 +377,47 @@ fn judge(
         refined_cut,
         oe_note,
     })
+}
+
+/// Why a physical candidate that cuts the held-out error is still not named below
+/// [`NONE_LEVEL`]: it must remove [`SMALL_GAIN`] of the error and cut every moving held-out
+/// run's.
+fn small_note(
+    ctx: &Context<'_>,
+    cause: Cause,
+    scored: &Scored,
+    current: &Scored,
+    gain: f64,
+    every_run: bool,
+) -> String {
+    let worse: Vec<String> = ctx
+        .ex
+        .selection_runs
+        .iter()
+        .filter(|&&i| {
+            scored.per_run[i] >= current.per_run[i] && !ctx.within_own_floor(scored.per_run[i])
+        })
+        .map(|&i| {
+            format!(
+                "{} {} -> {}",
+                ctx.ex.held[i].run.name,
+                pct(current.per_run[i], 2),
+                pct(scored.per_run[i], 2)
+            )
+        })
+        .collect();
+    format!(
+        "{cause} not named: it cuts the held-out NMAE by {:.0} % ({} -> {}), but below {NONE_LEVEL} % a cause must remove {:.0} % of the error and cut that of every held-out run that moves, unless the run stays within {OWN_LOG_FACTOR} times the log's own floor{}",
+        100.0 * gain,
+        pct(current.selection, 2),
+        pct(scored.selection, 2),
+        100.0 * SMALL_GAIN,
+        if every_run {
+            String::new()
+        } else {
+            format!(" (not: {})", worse.join(", "))
+        }
+    )
 }
 
 /// The finding of `cause`, named with its model `scored` over the current one; `refined_cut`:
@@ -422,7 +473,7 @@ fn finding(
     Finding {
         cause,
         axis: "axis".into(),
-        parameters: cause_parameters(cause, &scored.est, ctx.dt),
+        parameters: cause_parameters(cause, &scored.est, ctx.dt, ctx.info),
         nmae_before: current.selection,
         nmae_after: scored.selection,
         evidence: Evidence {
