@@ -23,7 +23,9 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import plant as P  # noqa: E402
 
-MASTER_SEED = 20261126
+# the seed of the published set; `--seed` (or STRANGERS_SEED) draws another set of the same
+# plan, cases the tool was never run on before (a held-back check of a change)
+MASTER_SEED = int(os.environ.get("STRANGERS_SEED", "20261126"))
 
 # cause -> number of cases (none >= 10, every cause >= 6)
 CAUSE_COUNTS = {
@@ -800,8 +802,17 @@ def main(argv=None):
     ap.add_argument("--out", required=True)
     ap.add_argument("--cases", type=int, default=None, help="first N cases (causes interleaved)")
     ap.add_argument("--only", default=None, choices=CAUSES)
+    ap.add_argument("--seed", type=int, default=None, help=f"master seed (default {MASTER_SEED})")
     a = ap.parse_args(argv)
+    set_seed(a.seed)
     generate(a.out, a.only, a.cases)
+
+
+def set_seed(seed: int | None) -> None:
+    """Draws the cases of another master seed (None: keep the current one)."""
+    global MASTER_SEED
+    if seed is not None:
+        MASTER_SEED = int(seed)
 
 
 if __name__ == "__main__":

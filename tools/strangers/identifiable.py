@@ -66,7 +66,9 @@ def braking_share(case: C.Case, xs: list) -> float:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", required=True, help="the cases' folder (cases.py --out)")
+    ap.add_argument("--seed", type=int, default=None, help="the master seed the cases were drawn with")
     a = ap.parse_args(argv)
+    C.set_seed(a.seed)
     print("| case | cause | parameter | log | effect vs plant without it | vs equivalent plant | half count | fitting runs braking |")
     print("|---|---|---|---|---|---|---|---|")
     for cause in CAUSES:

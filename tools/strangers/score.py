@@ -427,6 +427,8 @@ def main(argv=None):
     g = ap.add_mutually_exclusive_group()
     g.add_argument("--cases", type=int, default=None)
     g.add_argument("--only", default=None, choices=C.CAUSES)
+    ap.add_argument("--seed", type=int, default=None,
+                    help="master seed of the cases (default: cases.py's; another one draws cases never scored before)")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--timeout", type=float, default=300.0)
     ap.add_argument("--markdown", default=None)
@@ -436,6 +438,7 @@ def main(argv=None):
                     help="with --no-generate: score the reports of an earlier run instead of running the tool")
     a = ap.parse_args(argv)
 
+    C.set_seed(a.seed)
     binary = crane_bin()
     if a.reuse_reports and not a.no_generate:
         ap.error("--reuse-reports needs --no-generate")
