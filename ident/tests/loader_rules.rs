@@ -720,6 +720,85 @@ fn an_unknown_canonical_column_name_is_refused_with_the_known_ones() {
 }
 
 #[test]
+fn every_runs_key_is_named_at_its_own_line_in_every_form_of_the_file() {
+    // (case, dataset.toml, line of the bad key, text the message must hold); each bad key is
+    // in the second run, and a key of the same name comes earlier in the file
+    let cases = [
+        (
+            "gain spelled `gain` in the run, `gain_n_per_v` at the top",
+            "gain_n_per_v = 2\n[[runs]]\nfile = \"run.csv\"\ngain = 3\n\
+             [[runs]]\nfile = \"run.csv\"\ngain = 1e99\n",
+            7,
+            "gain must be in",
+        ),
+        (
+            "a run's inline columns table",
+            "[columns]\nx = \"x\"\n[[runs]]\nfile = \"run.csv\"\n\
+             [[runs]]\nfile = \"run.csv\"\ncolumns = { pos = \"x\" }\n",
+            7,
+            "`pos`",
+        ),
+        (
+            "a run's [runs.columns] sub-table",
+            "[[runs]]\nfile = \"run.csv\"\n[runs.columns]\nx = \"x\"\n\
+             [[runs]]\nfile = \"run.csv\"\n[runs.columns]\npos = \"x\"\n",
+            8,
+            "`pos`",
+        ),
+        (
+            "a columns key named like the first run's `kind`",
+            "[[runs]]\nfile = \"run.csv\"\nkind = \"other\"\n\
+             [[runs]]\nfile = \"run.csv\"\ncolumns = { kind = \"x\" }\n",
+            6,
+            "`kind`",
+        ),
+        (
+            "an inline array of runs",
+            "payload_kg = 0.5\nruns = [\n  { file = \"run.csv\", payload_kg = 0.2 },\n\
+             { file = \"run.csv\", payload_kg = 1e99 },\n]\n",
+            4,
+            "payload_kg must be in",
+        ),
+        (
+            "spaced [[ runs ]] headers",
+            "payload_kg = 0.5\n[[ runs ]]\nfile = \"run.csv\"\npayload_kg = 0.2\n\
+             [[ runs ]]\nfile = \"run.csv\"\npayload_kg = 1e99\n",
+            7,
+            "payload_kg must be in",
+        ),
+        (
+            "a quoted key",
+            "payload_kg = 0.5\n[[runs]]\nfile = \"run.csv\"\npayload_kg = 0.2\n\
+             [[runs]]\nfile = \"run.csv\"\n\"payload_kg\" = 1e99\n",
+            7,
+            "payload_kg must be in",
+        ),
+        (
+            "a run listed twice in an inline array",
+            "runs = [\n  { file = \"run.csv\" },\n  { file = \"./run.csv\", kind = \"validation\" },\n]\n",
+            3,
+            "listed twice",
+        ),
+    ];
+    for (case, toml, line, says) in cases {
+        let (d, e) = fails(toml, &axis_csv(10, 0.01));
+        assert_eq!(e.location.file, d.join("dataset.toml"), "{case}: {e}");
+        assert_eq!(e.location.line, Some(line), "{case}: {e}");
+        assert!(e.to_string().contains(says), "{case}: {e}");
+        std::fs::remove_dir_all(d).unwrap();
+    }
+    // the data set's own gain, spelled `gain`, while a run spells it `gain_n_per_v`: the
+    // top-level key, by its own name
+    let (d, e) = fails(
+        "gain = 1e99\n[[runs]]\nfile = \"run.csv\"\ngain_n_per_v = 3\n",
+        &axis_csv(10, 0.01),
+    );
+    assert_eq!(e.location.line, Some(1), "{e}");
+    assert!(e.to_string().contains("gain must be in"), "{e}");
+    std::fs::remove_dir_all(d).unwrap();
+}
+
+#[test]
 fn a_latin1_byte_is_refused_at_its_line_and_old_mac_endings_read() {
     let d = temp_dir("latin1");
     std::fs::write(d.join("dataset.toml"), "").unwrap();
