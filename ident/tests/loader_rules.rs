@@ -799,6 +799,85 @@ fn every_runs_key_is_named_at_its_own_line_in_every_form_of_the_file() {
 }
 
 #[test]
+fn every_table_key_is_named_at_its_own_line_in_every_form_of_the_file() {
+    // (case, dataset.toml, line of the bad key, text the message must hold); where a line of
+    // the same name comes earlier (in a multi-line description), a scan for `key =` found that
+    // one; inline tables, dotted and quoted keys and spaced headers it did not find at all
+    let earlier = "description = \"\"\"\ngravity = 9.81 on Earth\nx_pos = 0.02\n\
+                   the [controller] gains were\nkp = 2\nruns = two, listed below\n\"\"\"\n";
+    let ctl = "[columns]\nx = \"qm\"\nu = \"vir\"\n";
+    let cases = [
+        (
+            "[constants] after a description line `gravity = ...`",
+            format!("{earlier}[constants]\ngravity = 1e308\n"),
+            9,
+            "constants.gravity must be in",
+        ),
+        (
+            "an inline constants table",
+            "payload_kg = 0.5\nconstants = { gravity = 1e308 }\n".into(),
+            2,
+            "constants.gravity must be in",
+        ),
+        (
+            "a dotted key",
+            "payload_kg = 0.5\nconstants.trolley_mass_kg = 1e9\n".into(),
+            2,
+            "constants.trolley_mass_kg must be in",
+        ),
+        (
+            "a quoted key under a spaced header",
+            "[ constants ]\ngravity = 9.81\n\"encoder_pulses\" = 0\n".into(),
+            3,
+            "constants.encoder_pulses must be in",
+        ),
+        (
+            "a bad travel range after the description",
+            format!("{earlier}[constants]\n\"x_range_m\" = [0, 0]\n"),
+            9,
+            "constants.x_range_m must be [min, max]",
+        ),
+        (
+            "[breakaway_noise_var] after a description line `x_pos = ...`",
+            format!("{earlier}[breakaway_noise_var]\nx_pos = 0\n"),
+            9,
+            "breakaway_noise_var.x_pos must be in",
+        ),
+        (
+            "[controller] after a description line `kp = ...`",
+            format!("{earlier}{ctl}[controller]\nreference = \"qg\"\nkp = -1\nkv = 1\n"),
+            13,
+            "controller.kp must be in",
+        ),
+        (
+            "a spaced [ controller ] header",
+            format!("{ctl}[ controller ]\nreference = \"qg\"\nkp = 1\nkv = nan\n"),
+            7,
+            "controller.kv must be in",
+        ),
+        (
+            "an inline controller table",
+            format!("controller = {{ reference = \"qg\", kp = 1, kv = 1, kd = 1 }}\n{ctl}"),
+            1,
+            "not both",
+        ),
+        (
+            "`runs = []` after a description line `runs = ...`",
+            format!("{earlier}runs = []\n"),
+            8,
+            "lists no run",
+        ),
+    ];
+    for (case, toml, line, says) in cases {
+        let (d, e) = fails(&toml, &axis_csv(10, 0.01));
+        assert_eq!(e.location.file, d.join("dataset.toml"), "{case}: {e}");
+        assert_eq!(e.location.line, Some(line), "{case}: {e}");
+        assert!(e.to_string().contains(says), "{case}: {e}");
+        std::fs::remove_dir_all(d).unwrap();
+    }
+}
+
+#[test]
 fn a_latin1_byte_is_refused_at_its_line_and_old_mac_endings_read() {
     let d = temp_dir("latin1");
     std::fs::write(d.join("dataset.toml"), "").unwrap();

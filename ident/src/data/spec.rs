@@ -445,17 +445,6 @@ pub const TRAVEL_RANGE_M: (f64, f64) = (-100.0, 100.0);
 /// Breakaway noise variances [N^2].
 pub const NOISE_VAR_RANGE: (f64, f64) = (1e-12, 1e6);
 
-/// 1-based line of the first line defining `key` (as `key =` or `key=`), if any.
-fn line_of_key(text: &str, key: &str) -> Option<usize> {
-    text.lines()
-        .position(|l| {
-            let l = l.trim_start();
-            l.strip_prefix(key)
-                .is_some_and(|rest| rest.trim_start().starts_with('='))
-        })
-        .map(|i| i + 1)
-}
-
 /// 1-based line of byte offset `at` of `text`.
 fn line_at(text: &str, at: usize) -> usize {
     text[..at.min(text.len())].matches('\n').count() + 1
@@ -565,21 +554,28 @@ struct Checker<'a> {
 }
 
 impl Checker<'_> {
-    /// A bad value of `key` (the line is that of its last dotted component).
-    fn bad(&self, key: &str, what: String) -> DataError {
-        let last = key.rsplit('.').next().unwrap_or(key);
-        err(
-            self.file,
-            line_of_key(self.text, last),
-            None,
-            Problem::BadValue(what),
-        )
+    /// The line (1-based) of the checked key `key`, a dotted path from the top level
+    /// (`payload_kg`, `constants.gravity`): the line of that key in that table, found through
+    /// the TOML parser's spans ([`key_at`]) in every form (a `[constants]` table, spaced
+    /// `[ constants ]`, inline `constants = { ... }`, dotted `constants.gravity = ...`, quoted
+    /// keys); never a line of the same name elsewhere (in a multi-line string, another
+    /// table). `None` when the key is not written in the file.
+    fn line(&self, key: &str) -> Option<usize> {
+        let mut names: Vec<&str> = key.split('.').collect();
+        let last = names.pop()?;
+        let path: Vec<Seg<'_>> = names.into_iter().map(Seg::Key).collect();
+        key_at(self.text, &path, &[last]).map(|(l, _)| l)
     }
 
-    /// `v` of `key` must be finite and within `[lo, hi]` (`unit` is named in the error).
+    /// A bad value of `key` (a dotted path, named at its line: [`Checker::line`]).
+    fn bad(&self, key: &str, what: String) -> DataError {
+        err(self.file, self.line(key), None, Problem::BadValue(what))
+    }
+
+    /// `v` of `key` (a dotted path, named at its line: [`Checker::line`]) must be finite and
+    /// within `[lo, hi]` (`unit` is named in the error).
     fn within(&self, key: &str, v: f64, range: (f64, f64), unit: &str) -> Result<(), DataError> {
-        let last = key.rsplit('.').next().unwrap_or(key);
-        let at = || line_of_key(self.text, last).map(|l| (l, key.to_string()));
+        let at = || self.line(key).map(|l| (l, key.to_string()));
         self.within_at(at, key, v, range, unit)
     }
 
@@ -729,17 +725,12 @@ fn check_noise(ck: &Checker<'_>, n: &BreakawayNoise) -> Result<(), DataError> {
     Ok(())
 }
 
-/// The `[controller]` table, if any; an error names the line of the key inside the table.
+/// The `[controller]` table, if any; an error names the line of the key inside that table
+/// ([`key_at`]: an inline `controller = { ... }` or a spaced `[ controller ]` header too).
 fn check_controller(file: &Path, text: &str, spec: &DatasetSpec) -> Result<(), DataError> {
     if let Some(ctl) = &spec.controller {
         ctl.check().map_err(|(key, what)| {
-            let line = text
-                .find("[controller]")
-                .map(|at| text[..at].matches('\n').count())
-                .and_then(|skip| {
-                    line_of_key(&text.lines().skip(skip).collect::<Vec<_>>().join("\n"), key)
-                        .map(|l| l + skip)
-                });
+            let line = key_at(text, &[Seg::Key("controller")], &[key]).map(|(l, _)| l);
             err(file, line, None, Problem::BadValue(what))
         })?;
     }
@@ -829,7 +820,7 @@ fn check_runs_listed(file: &Path, text: &str, spec: &DatasetSpec) -> Result<(), 
     if explicit_empty {
         return Err(err(
             file,
-            line_of_key(text, "runs"),
+            key_at(text, &[], &["runs"]).map(|(l, _)| l),
             None,
             Problem::BadValue(
                 "`runs = []` lists no run; list them as [[runs]] tables, or leave `runs` out to read every *.csv of the directory"
