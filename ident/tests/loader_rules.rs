@@ -901,10 +901,44 @@ fn a_run_file_that_is_a_fifo_is_refused_instead_of_waiting_forever() {
         .status()
         .is_ok_and(|s| s.success());
     if made {
-        let m = load_dataset(&d).expect_err("a FIFO").to_string();
+        let e = load_dataset(&d).expect_err("a FIFO");
+        let m = e.to_string();
         assert!(m.contains("FIFO") && m.contains("pipe.csv"), "{m}");
+        // named at its `file` key in dataset.toml
+        assert_eq!(e.location.file, d.join("dataset.toml"), "{m}");
+        assert_eq!(e.location.line, Some(2), "{m}");
     }
     std::fs::remove_dir_all(d).unwrap();
+}
+
+#[test]
+fn a_missing_run_file_or_a_directory_is_named_at_its_file_key_with_the_path() {
+    // the second run's file is the bad one; the first run's `file` key comes earlier
+    for (case, toml, line) in [
+        (
+            "[[runs]] tables",
+            "[[runs]]\nfile = \"run.csv\"\n[[runs]]\nkind = \"validation\"\nfile = \"BAD\"\n",
+            5,
+        ),
+        (
+            "an inline array",
+            "runs = [\n  { file = \"run.csv\" },\n  { file = \"BAD\" },\n]\n",
+            3,
+        ),
+    ] {
+        for (bad, says) in [("missing.csv", "No such file"), ("sub.csv", "a directory")] {
+            let d = set(&toml.replace("BAD", bad), &axis_csv(10, 0.01));
+            std::fs::create_dir(d.join("sub.csv")).unwrap();
+            let e = load_dataset(&d).expect_err("must be refused");
+            let m = e.to_string();
+            assert_eq!(e.location.file, d.join("dataset.toml"), "{case}: {m}");
+            assert_eq!(e.location.line, Some(line), "{case}: {m}");
+            assert!(matches!(e.problem, Problem::Io(_)), "{case}: {m}");
+            let path = d.join(bad).display().to_string();
+            assert!(m.contains(&path) && m.contains(says), "{case}: {m}");
+            std::fs::remove_dir_all(d).unwrap();
+        }
+    }
 }
 
 #[test]

@@ -515,6 +515,14 @@ fn run_key(
     }
 }
 
+/// The line (1-based) of the `file` key of the `index`-th (0-based) run of `dataset.toml`'s
+/// `text` (a byte-order mark is skipped), in every form of the file ([`key_at`]); `None`
+/// when the text does not parse or that run has no `file` key.
+pub(crate) fn run_file_line(text: &str, index: usize) -> Option<usize> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    run_key(text, index, None, &["file"]).map(|(l, _)| l)
+}
+
 /// Parses `dataset.toml` text (a UTF-8 byte-order mark is skipped) and checks every number
 /// against its plausible range; errors name the file and the line of the key.
 pub fn parse_spec(file: &Path, text: &str) -> Result<DatasetSpec, DataError> {
