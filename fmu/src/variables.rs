@@ -533,11 +533,53 @@ const INIT_QD_DESC: [&str; 5] = [
     "initial swing rate beta",
 ];
 
-/// All variables, in `modelDescription.xml` order (its 1-based `index` is position + 1).
-pub fn all() -> Vec<Variable> {
-    use Causality as C;
-    use Variability as V;
-    let real = |name, vr, causality, variability, unit, description, slot| Variable {
+/// The input voltages `(name, description)` of axis 0 (X), 1 (Y), 2 (rope), value references
+/// 0..3.
+const INPUTS: [(&str, &str); 3] = [
+    ("u_x", "input voltage of the X drive (saturated to +-12 V)"),
+    ("u_y", "input voltage of the Y drive (saturated to +-12 V)"),
+    (
+        "u_l",
+        "input voltage of the rope drive (saturated to +-12 V)",
+    ),
+];
+/// The friction force outputs `(name, description)` of axis 0 (X), 1 (Y), 2 (rope) [N].
+const FRICTION_OUT: [(&str, &str); 3] = [
+    (
+        "friction.x",
+        "friction force of X: opposing motion when moving, the holding force when stopped",
+    ),
+    (
+        "friction.y",
+        "friction force of Y: opposing motion when moving, the holding force when stopped",
+    ),
+    (
+        "friction.l",
+        "friction force of the rope: opposing motion when moving, the holding force when stopped",
+    ),
+];
+/// The payload position outputs `(name, description)` x, y, z [m].
+const PAYLOAD_OUT: [(&str, &str); 3] = [
+    ("payload.x", "payload position x"),
+    ("payload.y", "payload position y"),
+    (
+        "payload.z",
+        "payload position z (up; hanging payloads have z < 0)",
+    ),
+];
+const MODE_NAMES: [&str; 3] = ["mode.x", "mode.y", "mode.l"];
+
+/// A real variable with unit `unit` and no declared range.
+fn real(
+    name: &'static str,
+    vr: u32,
+    causality: Causality,
+    variability: Variability,
+    unit: &'static str,
+    description: &'static str,
+    slot: Slot,
+) -> Variable {
+    Variable {
         name,
         vr,
         kind: Kind::Real,
@@ -547,112 +589,106 @@ pub fn all() -> Vec<Variable> {
         description,
         slot,
         range: Range::ANY,
-    };
+    }
+}
+
+/// All variables, in `modelDescription.xml` order (its 1-based `index` is position + 1):
+/// inputs, outputs, model parameters, initial state and step settings, friction options.
+pub fn all() -> Vec<Variable> {
     let mut v = Vec::with_capacity(100);
-    for (i, (name, desc)) in [
-        ("u_x", "input voltage of the X drive (saturated to +-12 V)"),
-        ("u_y", "input voltage of the Y drive (saturated to +-12 V)"),
-        (
-            "u_l",
-            "input voltage of the rope drive (saturated to +-12 V)",
-        ),
-    ]
-    .into_iter()
-    .enumerate()
-    {
+    inputs(&mut v);
+    outputs(&mut v);
+    model_parameters(&mut v);
+    initial_state(&mut v);
+    friction_options(&mut v);
+    v
+}
+
+/// The input voltages (value references 0..3).
+fn inputs(v: &mut Vec<Variable>) {
+    for (i, (name, desc)) in INPUTS.into_iter().enumerate() {
         v.push(real(
             name,
             i as u32,
-            C::Input,
-            V::Continuous,
+            Causality::Input,
+            Variability::Continuous,
             "V",
             desc,
             Slot::Input(i),
         ));
     }
+}
+
+/// The outputs: state `q`, `qd` (from 100), friction forces, tension, payload position, and
+/// the integer modes (from 200).
+fn outputs(v: &mut Vec<Variable>) {
+    let out = |name, vr, unit, desc, slot| {
+        real(
+            name,
+            vr,
+            Causality::Output,
+            Variability::Continuous,
+            unit,
+            desc,
+            slot,
+        )
+    };
     for i in 0..5 {
-        v.push(real(
+        v.push(out(
             Q_NAMES[i],
             100 + i as u32,
-            C::Output,
-            V::Continuous,
             Q_UNITS[i],
             Q_DESC[i],
             Slot::Q(i),
         ));
     }
     for i in 0..5 {
-        v.push(real(
+        v.push(out(
             QD_NAMES[i],
             105 + i as u32,
-            C::Output,
-            V::Continuous,
             QD_UNITS[i],
             QD_DESC[i],
             Slot::Qd(i),
         ));
     }
-    for (i, (name, desc)) in [
-        ("friction.x", "friction force of X: opposing motion when moving, the holding force when stopped"),
-        ("friction.y", "friction force of Y: opposing motion when moving, the holding force when stopped"),
-        ("friction.l", "friction force of the rope: opposing motion when moving, the holding force when stopped"),
-    ]
-    .into_iter()
-    .enumerate()
-    {
-        v.push(real(name, 110 + i as u32, C::Output, V::Continuous, "N", desc, Slot::Friction(i)));
+    for (i, (name, desc)) in FRICTION_OUT.into_iter().enumerate() {
+        v.push(out(name, 110 + i as u32, "N", desc, Slot::Friction(i)));
     }
-    v.push(real(
+    v.push(out(
         "tension",
         113,
-        C::Output,
-        V::Continuous,
         "N",
         "rope tension (positive pulls)",
         Slot::Tension,
     ));
-    for (i, (name, desc)) in [
-        ("payload.x", "payload position x"),
-        ("payload.y", "payload position y"),
-        (
-            "payload.z",
-            "payload position z (up; hanging payloads have z < 0)",
-        ),
-    ]
-    .into_iter()
-    .enumerate()
-    {
-        v.push(real(
-            name,
-            114 + i as u32,
-            C::Output,
-            V::Continuous,
-            "m",
-            desc,
-            Slot::Payload(i),
-        ));
+    for (i, (name, desc)) in PAYLOAD_OUT.into_iter().enumerate() {
+        v.push(out(name, 114 + i as u32, "m", desc, Slot::Payload(i)));
     }
-    for (i, name) in ["mode.x", "mode.y", "mode.l"].into_iter().enumerate() {
+    for (i, name) in MODE_NAMES.into_iter().enumerate() {
         v.push(Variable {
             name,
             vr: 200 + i as u32,
             kind: Kind::Integer,
-            causality: C::Output,
-            variability: V::Discrete,
+            causality: Causality::Output,
+            variability: Variability::Discrete,
             unit: None,
             description: "mode of the drive axis: -1 moving negative, 0 stopped (exact sticking), 1 moving positive",
             slot: Slot::Mode(i),
             range: Range::ANY,
         });
     }
+}
+
+/// The model parameters ([`PARAMS`], from [`VR_PARAM`]) and the model step `config.h`.
+fn model_parameters(v: &mut Vec<Variable>) {
     for (i, (name, unit, desc)) in PARAMS.iter().enumerate() {
         v.push(Variable {
             range: param_range(i),
             ..real(
                 name,
                 VR_PARAM + i as u32,
-                C::Parameter,
-                V::Tunable,
+                Causality::Parameter,
+                Variability::Tunable,
                 unit,
                 desc,
                 Slot::Param(i),
@@ -664,13 +700,17 @@ pub fn all() -> Vec<Variable> {
         ..real(
             "config.h",
             1100,
-            C::Parameter,
-            V::Fixed,
+            Causality::Parameter,
+            Variability::Fixed,
             "s",
             "fixed model step h (> 0); every communication step must be a whole multiple of it",
             Slot::Step,
         )
     });
+}
+
+/// The initial state `state.q`, `state.qd` (1101..1110) and the segment budget (1200).
+fn initial_state(v: &mut Vec<Variable>) {
     // The swing angles' own domain (the swing stops, `crane_model::SWING_STOP`); the
     // drive positions must lie within their axis limits, which are parameters themselves.
     let (half_pi, stop) = (core::f64::consts::FRAC_PI_2, crane_model::SWING_STOP);
@@ -689,8 +729,8 @@ pub fn all() -> Vec<Variable> {
             ..real(
                 INIT_Q[i],
                 1101 + i as u32,
-                C::Parameter,
-                V::Fixed,
+                Causality::Parameter,
+                Variability::Fixed,
                 Q_UNITS[i],
                 INIT_Q_DESC[i],
                 Slot::InitQ(i),
@@ -701,8 +741,8 @@ pub fn all() -> Vec<Variable> {
         v.push(real(
             INIT_QD[i],
             1106 + i as u32,
-            C::Parameter,
-            V::Fixed,
+            Causality::Parameter,
+            Variability::Fixed,
             QD_UNITS[i],
             INIT_QD_DESC[i],
             Slot::InitQd(i),
@@ -712,15 +752,13 @@ pub fn all() -> Vec<Variable> {
         name: "config.segment_budget",
         vr: 1200,
         kind: Kind::Integer,
-        causality: C::Parameter,
-        variability: V::Fixed,
+        causality: Causality::Parameter,
+        variability: Variability::Fixed,
         unit: None,
         description: "integration segments one step may use (1..=8): a real-time bound on the work of a step",
         slot: Slot::SegmentBudget,
         range: Range::between(1.0, crane_model::MAX_SEGMENTS as f64),
     });
-    friction_options(&mut v);
-    v
 }
 
 /// The friction options of the Python package (`crane_twin.Crane(law=..., gamma=...,

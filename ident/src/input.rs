@@ -12,15 +12,25 @@
 use std::io::{Error, ErrorKind};
 use std::path::Path;
 
-/// The text of the regular file at `path` (see the module doc for what is refused).
-pub fn read_text(path: &Path) -> std::io::Result<String> {
+/// `Ok` when `path` is a regular file once symbolic links are followed; otherwise the error
+/// [`read_text`] gives before opening it: the system's (a missing path: `NotFound`), or
+/// `InvalidInput` naming what it is (`a directory is not a regular file`, a FIFO, a device,
+/// a socket).
+pub fn check_regular(path: &Path) -> std::io::Result<()> {
     let meta = std::fs::metadata(path)?;
-    if !meta.is_file() {
-        return Err(Error::new(
+    if meta.is_file() {
+        Ok(())
+    } else {
+        Err(Error::new(
             ErrorKind::InvalidInput,
             format!("{} is not a regular file", kind_of(&meta)),
-        ));
+        ))
     }
+}
+
+/// The text of the regular file at `path` (see the module doc for what is refused).
+pub fn read_text(path: &Path) -> std::io::Result<String> {
+    check_regular(path)?;
     let bytes = std::fs::read(path)?;
     let text = match String::from_utf8(bytes) {
         Ok(t) => t,

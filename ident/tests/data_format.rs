@@ -203,8 +203,15 @@ fn bad_dataset_toml_is_located() {
         "payload_kg = 0.1\n[[runs]]\nfile = \"missing.csv\"\n",
     );
     let e = load_dataset(&d).unwrap_err();
-    assert_eq!(e.location.file, d.join("missing.csv"));
+    // named at the run's `file` key, with the path looked for
+    assert_eq!(e.location.file, d.join("dataset.toml"));
+    assert_eq!(e.location.line, Some(3), "{e}");
     assert!(matches!(e.problem, Problem::Io(_)));
+    assert!(
+        e.to_string()
+            .contains(&d.join("missing.csv").display().to_string()),
+        "{e}"
+    );
 }
 
 #[test]

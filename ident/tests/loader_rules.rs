@@ -720,6 +720,164 @@ fn an_unknown_canonical_column_name_is_refused_with_the_known_ones() {
 }
 
 #[test]
+fn every_runs_key_is_named_at_its_own_line_in_every_form_of_the_file() {
+    // (case, dataset.toml, line of the bad key, text the message must hold); each bad key is
+    // in the second run, and a key of the same name comes earlier in the file
+    let cases = [
+        (
+            "gain spelled `gain` in the run, `gain_n_per_v` at the top",
+            "gain_n_per_v = 2\n[[runs]]\nfile = \"run.csv\"\ngain = 3\n\
+             [[runs]]\nfile = \"run.csv\"\ngain = 1e99\n",
+            7,
+            "gain must be in",
+        ),
+        (
+            "a run's inline columns table",
+            "[columns]\nx = \"x\"\n[[runs]]\nfile = \"run.csv\"\n\
+             [[runs]]\nfile = \"run.csv\"\ncolumns = { pos = \"x\" }\n",
+            7,
+            "`pos`",
+        ),
+        (
+            "a run's [runs.columns] sub-table",
+            "[[runs]]\nfile = \"run.csv\"\n[runs.columns]\nx = \"x\"\n\
+             [[runs]]\nfile = \"run.csv\"\n[runs.columns]\npos = \"x\"\n",
+            8,
+            "`pos`",
+        ),
+        (
+            "a columns key named like the first run's `kind`",
+            "[[runs]]\nfile = \"run.csv\"\nkind = \"other\"\n\
+             [[runs]]\nfile = \"run.csv\"\ncolumns = { kind = \"x\" }\n",
+            6,
+            "`kind`",
+        ),
+        (
+            "an inline array of runs",
+            "payload_kg = 0.5\nruns = [\n  { file = \"run.csv\", payload_kg = 0.2 },\n\
+             { file = \"run.csv\", payload_kg = 1e99 },\n]\n",
+            4,
+            "payload_kg must be in",
+        ),
+        (
+            "spaced [[ runs ]] headers",
+            "payload_kg = 0.5\n[[ runs ]]\nfile = \"run.csv\"\npayload_kg = 0.2\n\
+             [[ runs ]]\nfile = \"run.csv\"\npayload_kg = 1e99\n",
+            7,
+            "payload_kg must be in",
+        ),
+        (
+            "a quoted key",
+            "payload_kg = 0.5\n[[runs]]\nfile = \"run.csv\"\npayload_kg = 0.2\n\
+             [[runs]]\nfile = \"run.csv\"\n\"payload_kg\" = 1e99\n",
+            7,
+            "payload_kg must be in",
+        ),
+        (
+            "a run listed twice in an inline array",
+            "runs = [\n  { file = \"run.csv\" },\n  { file = \"./run.csv\", kind = \"validation\" },\n]\n",
+            3,
+            "listed twice",
+        ),
+    ];
+    for (case, toml, line, says) in cases {
+        let (d, e) = fails(toml, &axis_csv(10, 0.01));
+        assert_eq!(e.location.file, d.join("dataset.toml"), "{case}: {e}");
+        assert_eq!(e.location.line, Some(line), "{case}: {e}");
+        assert!(e.to_string().contains(says), "{case}: {e}");
+        std::fs::remove_dir_all(d).unwrap();
+    }
+    // the data set's own gain, spelled `gain`, while a run spells it `gain_n_per_v`: the
+    // top-level key, by its own name
+    let (d, e) = fails(
+        "gain = 1e99\n[[runs]]\nfile = \"run.csv\"\ngain_n_per_v = 3\n",
+        &axis_csv(10, 0.01),
+    );
+    assert_eq!(e.location.line, Some(1), "{e}");
+    assert!(e.to_string().contains("gain must be in"), "{e}");
+    std::fs::remove_dir_all(d).unwrap();
+}
+
+#[test]
+fn every_table_key_is_named_at_its_own_line_in_every_form_of_the_file() {
+    // (case, dataset.toml, line of the bad key, text the message must hold); where a line of
+    // the same name comes earlier (in a multi-line description), a scan for `key =` found that
+    // one; inline tables, dotted and quoted keys and spaced headers it did not find at all
+    let earlier = "description = \"\"\"\ngravity = 9.81 on Earth\nx_pos = 0.02\n\
+                   the [controller] gains were\nkp = 2\nruns = two, listed below\n\"\"\"\n";
+    let ctl = "[columns]\nx = \"qm\"\nu = \"vir\"\n";
+    let cases = [
+        (
+            "[constants] after a description line `gravity = ...`",
+            format!("{earlier}[constants]\ngravity = 1e308\n"),
+            9,
+            "constants.gravity must be in",
+        ),
+        (
+            "an inline constants table",
+            "payload_kg = 0.5\nconstants = { gravity = 1e308 }\n".into(),
+            2,
+            "constants.gravity must be in",
+        ),
+        (
+            "a dotted key",
+            "payload_kg = 0.5\nconstants.trolley_mass_kg = 1e9\n".into(),
+            2,
+            "constants.trolley_mass_kg must be in",
+        ),
+        (
+            "a quoted key under a spaced header",
+            "[ constants ]\ngravity = 9.81\n\"encoder_pulses\" = 0\n".into(),
+            3,
+            "constants.encoder_pulses must be in",
+        ),
+        (
+            "a bad travel range after the description",
+            format!("{earlier}[constants]\n\"x_range_m\" = [0, 0]\n"),
+            9,
+            "constants.x_range_m must be [min, max]",
+        ),
+        (
+            "[breakaway_noise_var] after a description line `x_pos = ...`",
+            format!("{earlier}[breakaway_noise_var]\nx_pos = 0\n"),
+            9,
+            "breakaway_noise_var.x_pos must be in",
+        ),
+        (
+            "[controller] after a description line `kp = ...`",
+            format!("{earlier}{ctl}[controller]\nreference = \"qg\"\nkp = -1\nkv = 1\n"),
+            13,
+            "controller.kp must be in",
+        ),
+        (
+            "a spaced [ controller ] header",
+            format!("{ctl}[ controller ]\nreference = \"qg\"\nkp = 1\nkv = nan\n"),
+            7,
+            "controller.kv must be in",
+        ),
+        (
+            "an inline controller table",
+            format!("controller = {{ reference = \"qg\", kp = 1, kv = 1, kd = 1 }}\n{ctl}"),
+            1,
+            "not both",
+        ),
+        (
+            "`runs = []` after a description line `runs = ...`",
+            format!("{earlier}runs = []\n"),
+            8,
+            "lists no run",
+        ),
+    ];
+    for (case, toml, line, says) in cases {
+        let (d, e) = fails(&toml, &axis_csv(10, 0.01));
+        assert_eq!(e.location.file, d.join("dataset.toml"), "{case}: {e}");
+        assert_eq!(e.location.line, Some(line), "{case}: {e}");
+        assert!(e.to_string().contains(says), "{case}: {e}");
+        std::fs::remove_dir_all(d).unwrap();
+    }
+}
+
+#[test]
 fn a_latin1_byte_is_refused_at_its_line_and_old_mac_endings_read() {
     let d = temp_dir("latin1");
     std::fs::write(d.join("dataset.toml"), "").unwrap();
@@ -743,10 +901,44 @@ fn a_run_file_that_is_a_fifo_is_refused_instead_of_waiting_forever() {
         .status()
         .is_ok_and(|s| s.success());
     if made {
-        let m = load_dataset(&d).expect_err("a FIFO").to_string();
+        let e = load_dataset(&d).expect_err("a FIFO");
+        let m = e.to_string();
         assert!(m.contains("FIFO") && m.contains("pipe.csv"), "{m}");
+        // named at its `file` key in dataset.toml
+        assert_eq!(e.location.file, d.join("dataset.toml"), "{m}");
+        assert_eq!(e.location.line, Some(2), "{m}");
     }
     std::fs::remove_dir_all(d).unwrap();
+}
+
+#[test]
+fn a_missing_run_file_or_a_directory_is_named_at_its_file_key_with_the_path() {
+    // the second run's file is the bad one; the first run's `file` key comes earlier
+    for (case, toml, line) in [
+        (
+            "[[runs]] tables",
+            "[[runs]]\nfile = \"run.csv\"\n[[runs]]\nkind = \"validation\"\nfile = \"BAD\"\n",
+            5,
+        ),
+        (
+            "an inline array",
+            "runs = [\n  { file = \"run.csv\" },\n  { file = \"BAD\" },\n]\n",
+            3,
+        ),
+    ] {
+        for (bad, says) in [("missing.csv", "No such file"), ("sub.csv", "a directory")] {
+            let d = set(&toml.replace("BAD", bad), &axis_csv(10, 0.01));
+            std::fs::create_dir(d.join("sub.csv")).unwrap();
+            let e = load_dataset(&d).expect_err("must be refused");
+            let m = e.to_string();
+            assert_eq!(e.location.file, d.join("dataset.toml"), "{case}: {m}");
+            assert_eq!(e.location.line, Some(line), "{case}: {m}");
+            assert!(matches!(e.problem, Problem::Io(_)), "{case}: {m}");
+            let path = d.join(bad).display().to_string();
+            assert!(m.contains(&path) && m.contains(says), "{case}: {m}");
+            std::fs::remove_dir_all(d).unwrap();
+        }
+    }
 }
 
 #[test]

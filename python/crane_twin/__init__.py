@@ -6,8 +6,9 @@ native speed.
   released), results as numpy arrays.
 - :class:`Params`: parameters, to and from the ``crane`` CLI's TOML files.
 - :class:`CraneBatch`: simulators stepped together (the vector environment's engine).
-- :func:`linearize`: the Jacobians ``A``, ``B`` of the continuous-time model at a sliding
-  operating point (for python-control).
+- :func:`linearize`: the Jacobians ``A``, ``B`` of the continuous-time model (for
+  python-control): at a sliding operating point with the hybrid law, at any point (at rest
+  too) with ``law="tanh"``.
 - Full snapshots (what issue 23 calls ``get_state`` / ``set_state``): ``snapshot()`` /
   ``restore(snapshot)`` / ``from_snapshot(snapshot)`` on :class:`Crane` and
   :class:`CraneBatch`, and on the Gymnasium environments; ``pickle`` round trips of all of

@@ -170,18 +170,30 @@ def linearize(
     state: _StateLike,
     u: Sequence[float],
     *,
+    law: str = "hybrid",
+    gamma: float = 1000.0,
     stiction: _StictionLike = None,
     eps: float = 1e-6,
 ) -> Tuple[_FloatArray, _FloatArray]:
-    """``(A, B)``, ``(10, 10)`` and ``(10, 3)``: the Jacobians of the hybrid model's
-    continuous-time right-hand side ``dx/dt = f(x, u)`` at ``(state, u)`` by central finite
-    differences (steps ``eps * max(1, |v|)``), for python-control (``control.ss(A, B, C, D)``).
+    """``(A, B)``, ``(10, 10)`` and ``(10, 3)``: the Jacobians of the model's continuous-time
+    right-hand side ``dx/dt = f(x, u)`` at ``(state, u)`` by central finite differences
+    (steps ``eps * max(1, |v|)``), for python-control (``control.ss(A, B, C, D)``).
 
     ``x = [x, y, L, alpha, beta, xd, yd, Ld, alphad, betad]`` [m, m, m, rad, rad, m/s, m/s,
     m/s, rad/s, rad/s] (hanging: ``alpha = pi/2``, ``beta = 0``; ``Ld > 0`` lowers), ``u =
-    [u_x, u_y, u_l]`` [V] strictly inside +-12 V. X and Y must slide (``xd``, ``yd``
-    nonzero): a stopped axis raises ``InputError`` naming ``state.qd[i]`` (dry friction is
-    not differentiable at zero velocity). The rope slides or is held by friction strictly
-    inside its breakaway band (held: rows ``L``, ``Ld`` and column ``Ld`` are zero). A
-    sliding point is no equilibrium: ``d(dx)/dt = A dx + B du`` models deviations from the
-    nonlinear trajectory through it, over short horizons while no axis stops."""
+    [u_x, u_y, u_l]`` [V] strictly inside +-12 V. ``law`` and ``gamma`` [s/m] as ``Crane``.
+
+    ``law="hybrid"``: X and Y must slide (``xd``, ``yd`` nonzero): a stopped axis raises
+    ``InputError`` naming ``state.qd[i]`` (dry friction is not differentiable at zero
+    velocity). The rope slides or is held by friction strictly inside its breakaway band
+    (held: rows ``L``, ``Ld`` and column ``Ld`` are zero). A sliding point is no equilibrium:
+    ``d(dx)/dt = A dx + B du`` models deviations from the nonlinear trajectory through it,
+    over short horizons while no axis stops.
+
+    ``law="tanh"``: differentiable in every velocity, so any point is accepted, at rest
+    included. The hanging equilibrium is ``qd = 0``, ``alpha = pi/2``, ``beta = 0``, ``u =
+    [0, 0, -payload_mass * gravity / rope.gain]`` (the rope drive carries the weight; with
+    ``u_l = 0`` the rope creeps down). Friction there acts as a viscous slope ``Dbar + gamma
+    Cbar(q)`` [N s/m], valid while ``|gamma qd|`` stays well below 1; where an axis' ``+`` and
+    ``-`` coefficients differ, ``A`` holds the mean of the two one-sided slopes. ``eps *
+    gamma`` must be at most 0.01. ``stiction`` has no effect under this law (as in ``Crane``)."""

@@ -1,6 +1,8 @@
 """`crane_twin.linearize` (issue 23): the linear model's response to small input steps matches
 the nonlinear hybrid model's around a sliding operating point, and a stuck axis (mode 0),
-where friction is not differentiable, is refused with a clear error."""
+where friction is not differentiable, is refused with a clear error. With the `tanh` law the
+model is smooth, and the linear model at rest (the hanging equilibrium) follows the nonlinear
+one for small input steps."""
 
 from __future__ import annotations
 
@@ -159,3 +161,124 @@ def test_other_points_where_the_model_is_not_differentiable_are_refused():
     with pytest.raises(ct.ParameterError) as e:
         ct.linearize(None, [0.9] + sliding[1:], [1.0, 1.0, 0.0])
     assert e.value.field == "state.q[0]"
+
+
+# ---- the tanh law: linearisation at rest (the hanging equilibrium) ----------------------------
+
+
+def _hanging_at_rest(gamma, params=None):
+    """The default crane at rest, hanging straight down, under the ``tanh`` law, and the input
+    that holds it there: the rope drive carries the payload's weight."""
+    c = ct.Crane(params, h=H, law="tanh", gamma=gamma)
+    assert not np.any(c.state[5:]) and c.state[3] == np.pi / 2 and c.state[4] == 0.0
+    p = c.params
+    u0 = np.array([0.0, 0.0, -p["payload_mass"] * p["gravity"] / p["rope.gain"]])
+    return c, u0
+
+
+# Friction with equal + and - coefficients on every drive axis: the tanh law has no kink at
+# qd = 0, so the central difference is the derivative itself.
+SYMMETRIC = {
+    "x.viscous_neg": ct.Params()["x.viscous_pos"],
+    "x.dry_neg": ct.Params()["x.dry_pos"],
+    "y.viscous_neg": ct.Params()["y.viscous_pos"],
+    "y.dry_neg": ct.Params()["y.dry_pos"],
+}
+
+
+@pytest.mark.parametrize(
+    "gamma, symmetric, tol",
+    [
+        # default parameters: X's + and - slopes at x = 0.25 differ by about 3 %, and A holds
+        # their mean, so a one-way step is off by about 1.5 % (measured: largest component
+        # 1.4 % at gamma 1000, 1.7 % at 100; whole trajectory 1.0 %, 1.1 %)
+        (1000.0, False, (0.03, 0.02)),
+        (100.0, False, (0.03, 0.02)),
+        # no kink: only the tanh's own curvature over the small step remains (measured 0.09 %,
+        # 0.08 %)
+        (1000.0, True, (0.003, 0.002)),
+    ],
+)
+def test_tanh_law_the_linear_model_at_rest_follows_the_nonlinear_one(gamma, symmetric, tol):
+    params = ct.Params().replace(SYMMETRIC) if symmetric else None
+    c, u0 = _hanging_at_rest(gamma, params)
+    a, b = ct.linearize(c.params, c.state, u0, law="tanh", gamma=gamma)
+    assert a.shape == (10, 10) and b.shape == (10, 3)
+    n = 200  # 0.2 s
+    # an equilibrium: the nonlinear model stays at rest under u0 (so f(x0, u0) = 0)
+    rest = copy.copy(c)
+    drift = np.array([rest.step(u0) for _ in range(n)]) - c.state
+    assert np.abs(drift).max() < 1e-12, np.abs(drift).max()
+    # small steps: |gamma qd| stays below 0.1, where tanh is within 0.4 % of its slope
+    du = np.array([0.02, -0.02, 0.02])
+    base, moved = copy.copy(c), copy.copy(c)
+    xa = np.array([c.state] + [base.step(u0) for _ in range(n)])
+    xb = np.array([c.state] + [moved.step(u0 + du) for _ in range(n)])
+    dn = xb - xa
+    dl = _linear_response(a, b, du, n)
+    scale = np.abs(dn).max(axis=0)
+    assert np.all(scale[5:8] > 1e-5), "the input step moves X, Y and the rope measurably"
+    assert np.all(gamma * scale[5:8] < 0.1), "and slowly: the tanh stays nearly linear"
+    assert scale[8] > 1e-4 and scale[9] > 1e-4, "and swings the payload"
+    rel = np.abs(dn - dl).max(axis=0) / scale
+    assert rel.max() < tol[0], rel
+    total = np.linalg.norm(dn - dl) / np.linalg.norm(dn)
+    assert total < tol[1], total
+    # A matters: the input alone (A = 0) is far worse
+    without_a = _linear_response(np.zeros_like(a), b, du, n)
+    assert np.linalg.norm(dn - without_a) / np.linalg.norm(dn) > 10 * total
+    # friction at rest is a steep viscous slope: the mean over the + and - sides of
+    # Dbar + gamma Cbar(q) [N s/m]. Both A's and B's entries of an axis' velocity are that
+    # slope and the gain [N/V] times the same entry of the inverse mass matrix.
+    p = c.params
+    for i, axis in enumerate(["x", "y", "rope"]):
+        q = c.state[i]
+        sides = [
+            p[f"{axis}.viscous_{s}"] + gamma * np.polyval(p[f"{axis}.dry_{s}"][::-1], q)
+            for s in ("pos", "neg")
+        ]
+        slope = -a[5 + i, 5 + i] / b[5 + i, i] * p[f"{axis}.gain"]
+        assert slope == pytest.approx(np.mean(sides), rel=1e-6), (axis, slope, sides)
+
+
+def test_tanh_law_far_from_zero_velocity_equals_the_hybrid_law():
+    """Sliding fast (|gamma qd| >= 50), tanh(gamma qd) is sign(qd) to 1e-43 and its slope
+    vanishes: both laws are Dbar qd + sign(qd) Cbar(q), so their Jacobians agree."""
+    sliding = [0.3, 0.3, 0.35, np.pi / 2 + 0.01, -0.02, 0.1, -0.1, 0.05, 0.05, -0.05]
+    u0 = [4.0, -4.0, 1.0]
+    a_h, b_h = ct.linearize(None, sliding, u0)
+    a_t, b_t = ct.linearize(None, sliding, u0, law="tanh", gamma=1000.0)
+    np.testing.assert_allclose(a_t, a_h, rtol=1e-6, atol=1e-9 * np.abs(a_h).max())
+    np.testing.assert_allclose(b_t, b_h, rtol=1e-6, atol=1e-9 * np.abs(b_h).max())
+    # while near zero velocity the tanh law adds its steep slope
+    a_slow, _ = ct.linearize(None, sliding, u0, law="tanh", gamma=10.0)
+    assert a_slow[5, 5] < a_h[5, 5] - 0.5 and a_slow[6, 6] < a_h[6, 6] - 0.5
+
+
+def test_tanh_law_is_differentiable_at_rest_where_the_hybrid_law_is_refused():
+    c, u0 = _hanging_at_rest(1000.0)
+    with pytest.raises(ct.InputError, match=r"state\.qd\[0\].*not differentiable"):
+        ct.linearize(c.params, c.state, u0)
+    a, b = ct.linearize(c.params, c.state, u0, law="tanh")
+    assert np.all(np.isfinite(a)) and np.all(np.isfinite(b))
+    np.testing.assert_array_equal(a[:5, 5:], np.eye(5))
+    assert b[5, 0] > 0 and b[6, 1] > 0 and b[7, 2] > 0
+    # the default gamma is Crane's (1000 s/m)
+    a_1000, _ = ct.linearize(c.params, c.state, u0, law="tanh", gamma=1000.0)
+    np.testing.assert_array_equal(a, a_1000)
+    # stiction has no effect under the tanh law, as in Crane
+    a_st, _ = ct.linearize(c.params, c.state, u0, law="tanh", stiction=(1.5, 0.01))
+    np.testing.assert_array_equal(a, a_st)
+
+
+def test_tanh_law_bad_options_are_refused():
+    c, u0 = _hanging_at_rest(1000.0)
+    with pytest.raises(ct.InputError, match=r"eps.*gamma"):
+        ct.linearize(c.params, c.state, u0, law="tanh", gamma=1e5, eps=1e-6)
+    a, _ = ct.linearize(c.params, c.state, u0, law="tanh", gamma=1e5, eps=1e-7)
+    assert np.all(np.isfinite(a))
+    with pytest.raises(ct.InputError, match="law"):
+        ct.linearize(c.params, c.state, u0, law="coulomb")
+    with pytest.raises(ct.ParameterError) as e:
+        ct.linearize(c.params, c.state, u0, law="tanh", gamma=0.0)
+    assert e.value.field == "config.law.gamma"

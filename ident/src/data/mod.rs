@@ -643,7 +643,9 @@ pub fn load_run(dir: &Path, ds: &DatasetSpec, spec: &RunSpec) -> Result<Run, Dat
 
 /// Loads a data set directory: `dataset.toml`, then every run it lists (or every `*.csv` in
 /// file-name order, kind `other`, when it lists none). The first bad file stops the load with
-/// an error naming file, line and column.
+/// an error naming file, line and column; a listed run's file that is missing or is not a
+/// regular file (a directory, a FIFO) is named at the line of its `file` key in
+/// `dataset.toml`, with the path looked for, before any run is read.
 pub fn load_dataset(dir: &Path) -> Result<Dataset, DataError> {
     let spec_path = dir.join(DATASET_FILE);
     let text = crate::input::read_text(&spec_path).map_err(|e| {
@@ -660,6 +662,21 @@ pub fn load_dataset(dir: &Path) -> Result<Dataset, DataError> {
         err(&spec_path, None, None, Problem::Io(why))
     })?;
     let mut spec = parse_spec(&spec_path, &text)?;
+    // a listed run's file that is missing, or is no regular file (a FIFO would wait
+    // forever): named at the line of its `file` key in dataset.toml, with the path looked for
+    for (i, r) in spec.runs.iter().enumerate() {
+        let path = dir.join(&r.file);
+        if let Err(e) = crate::input::check_regular(&path) {
+            let shown = dir.join(clip(&r.file));
+            let why = format!(
+                "run file `{}` (the `file` of [[runs]] entry {}): {e}",
+                shown.display(),
+                i + 1
+            );
+            let line = spec::run_file_line(&text, i);
+            return Err(err(&spec_path, line, None, Problem::Io(why)));
+        }
+    }
     if spec.runs.is_empty() {
         let mut files: Vec<String> = std::fs::read_dir(dir)
             .map_err(|e| err(dir, None, None, Problem::Io(e.to_string())))?

@@ -445,36 +445,82 @@ pub const TRAVEL_RANGE_M: (f64, f64) = (-100.0, 100.0);
 /// Breakaway noise variances [N^2].
 pub const NOISE_VAR_RANGE: (f64, f64) = (1e-12, 1e6);
 
-/// 1-based line of the first line defining `key` (as `key =` or `key=`), if any.
-fn line_of_key(text: &str, key: &str) -> Option<usize> {
-    text.lines()
-        .position(|l| {
-            let l = l.trim_start();
-            l.strip_prefix(key)
-                .is_some_and(|rest| rest.trim_start().starts_with('='))
-        })
-        .map(|i| i + 1)
+/// 1-based line of byte offset `at` of `text`.
+fn line_at(text: &str, at: usize) -> usize {
+    text[..at.min(text.len())].matches('\n').count() + 1
 }
 
-/// The line (1-based) of `key` in the `index`-th (0-based) `[[runs]]` table of `text`;
-/// `None` when the runs are not written as tables or the key is not in that one.
-fn line_of_run_key(text: &str, index: usize, key: &str) -> Option<usize> {
-    let (mut seen, mut inside) = (0usize, false);
-    for (n, l) in text.lines().enumerate() {
-        let l = l.trim_start();
-        if l.starts_with('[') {
-            inside = l.starts_with("[[runs]]") && {
-                seen += 1;
-                seen == index + 1
-            };
-        } else if inside
-            && l.strip_prefix(key)
-                .is_some_and(|rest| rest.trim_start().starts_with('='))
-        {
-            return Some(n + 1);
+/// The entry `key` of a parsed TOML table, with its key's span.
+fn entry<'a, 'i>(
+    table: &'a toml::de::DeTable<'i>,
+    key: &str,
+) -> Option<(
+    &'a toml::Spanned<toml::de::DeString<'i>>,
+    &'a toml::Spanned<toml::de::DeValue<'i>>,
+)> {
+    table.iter().find(|(k, _)| k.get_ref().as_ref() == key)
+}
+
+/// A step of a path into a TOML document: a table's key or an array's element (0-based).
+#[derive(Clone, Copy)]
+enum Seg<'a> {
+    /// The value of this key of a table.
+    Key(&'a str),
+    /// This element of an array.
+    At(usize),
+}
+
+/// Where a key of the table at `path` is written: its line (1-based) and its spelling, the
+/// first of `spellings` (one key's name and aliases) found there. Found through the TOML
+/// parser's spans, so every form gives the key's own line: `[[runs]]` tables (spaced
+/// `[[ runs ]]` too), an inline `runs = [{ ... }]`, quoted keys, inline or `[runs.columns]`
+/// sub-tables; never the line of a key of the same name elsewhere (the data set's own, or
+/// another run's). `None` when the text does not parse or the table has no such key.
+fn key_at(text: &str, path: &[Seg<'_>], spellings: &[&str]) -> Option<(usize, String)> {
+    let doc = toml::de::DeTable::parse(text).ok()?;
+    let mut table = doc.get_ref();
+    let mut value: Option<&toml::de::DeValue<'_>> = None;
+    for seg in path {
+        let v = match *seg {
+            Seg::Key(k) => entry(table, k)?.1.get_ref(),
+            Seg::At(i) => value?.as_array()?.get(i)?.get_ref(),
+        };
+        if let Some(t) = v.as_table() {
+            table = t;
         }
+        value = Some(v);
     }
-    None
+    if value.is_some_and(|v| v.as_table().is_none()) {
+        return None; // the path ends on an array or a value, not a table
+    }
+    spellings.iter().find_map(|name| {
+        entry(table, name).map(|(k, _)| (line_at(text, k.span().start), name.to_string()))
+    })
+}
+
+/// [`key_at`] in the `index`-th (0-based) run (`sub`: in its sub-table of that name).
+fn run_key(
+    text: &str,
+    index: usize,
+    sub: Option<&str>,
+    spellings: &[&str],
+) -> Option<(usize, String)> {
+    match sub {
+        Some(name) => key_at(
+            text,
+            &[Seg::Key("runs"), Seg::At(index), Seg::Key(name)],
+            spellings,
+        ),
+        None => key_at(text, &[Seg::Key("runs"), Seg::At(index)], spellings),
+    }
+}
+
+/// The line (1-based) of the `file` key of the `index`-th (0-based) run of `dataset.toml`'s
+/// `text` (a byte-order mark is skipped), in every form of the file ([`key_at`]); `None`
+/// when the text does not parse or that run has no `file` key.
+pub(crate) fn run_file_line(text: &str, index: usize) -> Option<usize> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    run_key(text, index, None, &["file"]).map(|(l, _)| l)
 }
 
 /// Parses `dataset.toml` text (a UTF-8 byte-order mark is skipped) and checks every number
@@ -483,11 +529,9 @@ pub fn parse_spec(file: &Path, text: &str) -> Result<DatasetSpec, DataError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let spec = parse_toml(file, text)?;
     let ck = Checker { file, text };
-    let gain_key = if text.contains("gain_n_per_v") {
-        "gain_n_per_v"
-    } else {
-        "gain"
-    };
+    // the data set's gain as its top level spells it (a run's own spelling does not count)
+    let gain_key = key_at(text, &[], &["gain", "gain_n_per_v"]).map_or("gain".into(), |(_, k)| k);
+    let gain_key = gain_key.as_str();
     check_scales(&ck, &spec, gain_key)?;
     check_constants(&ck, &spec.constants)?;
     check_noise(&ck, &spec.breakaway_noise_var)?;
@@ -518,27 +562,36 @@ struct Checker<'a> {
 }
 
 impl Checker<'_> {
-    /// A bad value of `key` (the line is that of its last dotted component).
+    /// The line (1-based) of the checked key `key`, a dotted path from the top level
+    /// (`payload_kg`, `constants.gravity`): the line of that key in that table, found through
+    /// the TOML parser's spans ([`key_at`]) in every form (a `[constants]` table, spaced
+    /// `[ constants ]`, inline `constants = { ... }`, dotted `constants.gravity = ...`, quoted
+    /// keys); never a line of the same name elsewhere (in a multi-line string, another
+    /// table). `None` when the key is not written in the file.
+    fn line(&self, key: &str) -> Option<usize> {
+        let mut names: Vec<&str> = key.split('.').collect();
+        let last = names.pop()?;
+        let path: Vec<Seg<'_>> = names.into_iter().map(Seg::Key).collect();
+        key_at(self.text, &path, &[last]).map(|(l, _)| l)
+    }
+
+    /// A bad value of `key` (a dotted path, named at its line: [`Checker::line`]).
     fn bad(&self, key: &str, what: String) -> DataError {
-        let last = key.rsplit('.').next().unwrap_or(key);
-        err(
-            self.file,
-            line_of_key(self.text, last),
-            None,
-            Problem::BadValue(what),
-        )
+        err(self.file, self.line(key), None, Problem::BadValue(what))
     }
 
-    /// `v` of `key` must be finite and within `[lo, hi]` (`unit` is named in the error).
+    /// `v` of `key` (a dotted path, named at its line: [`Checker::line`]) must be finite and
+    /// within `[lo, hi]` (`unit` is named in the error).
     fn within(&self, key: &str, v: f64, range: (f64, f64), unit: &str) -> Result<(), DataError> {
-        let last = key.rsplit('.').next().unwrap_or(key);
-        self.within_at(line_of_key(self.text, last), key, v, range, unit)
+        let at = || self.line(key).map(|l| (l, key.to_string()));
+        self.within_at(at, key, v, range, unit)
     }
 
-    /// [`Checker::within`] for a key at `line` (1-based; `None`: not found).
+    /// [`Checker::within`] for a key that `at` finds when the value is refused: its line
+    /// (1-based) and its spelling, named in the error (`None`: not found; then named `key`).
     fn within_at(
         &self,
-        line: Option<usize>,
+        at: impl FnOnce() -> Option<(usize, String)>,
         key: &str,
         v: f64,
         (lo, hi): (f64, f64),
@@ -547,6 +600,10 @@ impl Checker<'_> {
         if v.is_finite() && v >= lo && v <= hi {
             Ok(())
         } else {
+            let (line, key) = match at() {
+                Some((l, k)) => (Some(l), k),
+                None => (None, key.to_string()),
+            };
             let what = format!(
                 "{key} must be in [{}, {}] {unit} (got {})",
                 Num(lo),
@@ -676,17 +733,12 @@ fn check_noise(ck: &Checker<'_>, n: &BreakawayNoise) -> Result<(), DataError> {
     Ok(())
 }
 
-/// The `[controller]` table, if any; an error names the line of the key inside the table.
+/// The `[controller]` table, if any; an error names the line of the key inside that table
+/// ([`key_at`]: an inline `controller = { ... }` or a spaced `[ controller ]` header too).
 fn check_controller(file: &Path, text: &str, spec: &DatasetSpec) -> Result<(), DataError> {
     if let Some(ctl) = &spec.controller {
         ctl.check().map_err(|(key, what)| {
-            let line = text
-                .find("[controller]")
-                .map(|at| text[..at].matches('\n').count())
-                .and_then(|skip| {
-                    line_of_key(&text.lines().skip(skip).collect::<Vec<_>>().join("\n"), key)
-                        .map(|l| l + skip)
-                });
+            let line = key_at(text, &[Seg::Key("controller")], &[key]).map(|(l, _)| l);
             err(file, line, None, Problem::BadValue(what))
         })?;
     }
@@ -701,18 +753,24 @@ fn check_run_entries(
 ) -> Result<(), DataError> {
     for (i, r) in spec.runs.iter().enumerate() {
         // the line of the key in this run's own table (the data set's keys of the same name
-        // come first in the file)
-        let line = |key: &str| line_of_run_key(ck.text, i, key).or(line_of_key(ck.text, key));
+        // come first in the file), and the gain as this run spells it
+        let at = |keys: &'static [&'static str]| move || run_key(ck.text, i, None, keys);
         if let Some(m) = r.payload_kg {
-            ck.within_at(line("payload_kg"), "payload_kg", m, PAYLOAD_RANGE_KG, "kg")?;
+            ck.within_at(at(&["payload_kg"]), "payload_kg", m, PAYLOAD_RANGE_KG, "kg")?;
         }
         if let Some(g) = r.gain_n_per_v {
             let what = "(effort per input unit)";
-            ck.within_at(line(gain_key), gain_key, g, Gain::RANGE, what)?;
+            ck.within_at(
+                at(&["gain", "gain_n_per_v"]),
+                gain_key,
+                g,
+                Gain::RANGE,
+                what,
+            )?;
         }
         if r.file.trim().is_empty() {
             let what = Problem::BadValue("runs.file must name a CSV file".into());
-            return Err(err(ck.file, line("file"), None, what));
+            return Err(err(ck.file, at(&["file"])().map(|(l, _)| l), None, what));
         }
     }
     Ok(())
@@ -727,15 +785,22 @@ pub const CANONICAL_COLUMNS: [&str; 11] = [
 /// Every key of a `[columns]` table (the data set's and each run's) must be a canonical name:
 /// `pos = "x"` would otherwise be ignored without a word.
 fn check_columns(file: &Path, text: &str, spec: &DatasetSpec) -> Result<(), DataError> {
-    let tables = std::iter::once(&spec.columns).chain(spec.runs.iter().map(|r| &r.columns));
-    for cols in tables {
+    let runs = spec.runs.iter().enumerate();
+    let tables =
+        std::iter::once((None, &spec.columns)).chain(runs.map(|(i, r)| (Some(i), &r.columns)));
+    for (run, cols) in tables {
         if let Some(k) = cols
             .keys()
             .find(|k| !CANONICAL_COLUMNS.contains(&k.as_str()))
         {
+            // the key's own line: in the data set's [columns] or in this run's columns
+            let line = match run {
+                None => key_at(text, &[Seg::Key("columns")], &[k]),
+                Some(i) => run_key(text, i, Some("columns"), &[k]),
+            };
             return Err(err(
                 file,
-                line_of_key(text, k),
+                line.map(|(l, _)| l),
                 None,
                 Problem::BadValue(format!(
                     "[columns] key `{k}` is no canonical column name; the keys are the names the tool expects ({}) and the values the names in your files, e.g. `x = \"{k}\"`",
@@ -763,7 +828,7 @@ fn check_runs_listed(file: &Path, text: &str, spec: &DatasetSpec) -> Result<(), 
     if explicit_empty {
         return Err(err(
             file,
-            line_of_key(text, "runs"),
+            key_at(text, &[], &["runs"]).map(|(l, _)| l),
             None,
             Problem::BadValue(
                 "`runs = []` lists no run; list them as [[runs]] tables, or leave `runs` out to read every *.csv of the directory"
@@ -778,17 +843,8 @@ fn check_runs_listed(file: &Path, text: &str, spec: &DatasetSpec) -> Result<(), 
     };
     for (i, a) in spec.runs.iter().enumerate() {
         if let Some(b) = spec.runs[..i].iter().find(|b| key(&b.file) == key(&a.file)) {
-            // the line of the i-th `file = ...` key: this run's
-            let line = text
-                .lines()
-                .enumerate()
-                .filter(|(_, l)| {
-                    l.trim_start()
-                        .strip_prefix("file")
-                        .is_some_and(|r| r.trim_start().starts_with('='))
-                })
-                .nth(i)
-                .map(|(k, _)| k + 1);
+            // the line of this run's own `file` key
+            let line = run_key(text, i, None, &["file"]).map(|(l, _)| l);
             return Err(err(
                 file,
                 line,
