@@ -315,7 +315,6 @@ const KNOWN_MISSES: &[&str] = &[
     "clean",
     "dry friction +30 % once ready",
     "1 N bump at x = 0.31 m once ready",
-    "stiction ratio 1.0 -> 1.8 once ready",
 ];
 
 /// How one scenario went over the seeds.

@@ -35,7 +35,7 @@ pub mod map;
 use super::control::LoopConfig;
 use super::observer::Observer;
 use alarm::{Alarm, AlarmKind, Debounce};
-use breakaway::BreakawayWatch;
+use breakaway::{BreakawayWatch, Limits, Sense};
 use crane_model::friction::dry_at;
 use crane_model::{Axis, Direction, Mode, Real};
 use map::{MapSettings, SlidingMap, BINS};
@@ -64,6 +64,8 @@ pub struct Settings {
     /// the other direction's map), so the chance of a false one is about the square of a
     /// single tail (4: 3.2e-5 squared).
     pub k_local: f32,
+    /// The control period [s].
+    pub period: f32,
     /// Periods of commissioning (nothing judged).
     pub commissioning: u64,
     /// Periods an axis must have slid before its samples are used (observer transient).
@@ -78,6 +80,12 @@ pub struct Settings {
     /// Distance [m] per axis the position must leave its place at rest to count as a restart:
     /// the observer's stick band (quantisation and count noise stay within it).
     pub band: [f32; N],
+    /// The encoder's step [m] per axis: a reading out of the count of the place at rest is
+    /// the onset of a breakaway ([`breakaway`]).
+    pub quantum: [f32; N],
+    /// `1 - alpha`, the observer's position gain's complement: the encoder reading is the
+    /// position estimate plus this times the observer's innovation.
+    pub reading_gain: f32,
     /// Most bins out of band that still make a local change (more is a travel-wide one).
     pub local_bins: usize,
     /// Moves of a map over which the travel level's band is learned before it is judged.
@@ -109,6 +117,7 @@ impl Settings {
             },
             k,
             k_local: 4.5,
+            period: per as f32,
             commissioning: (300.0 / per) as u64,
             settle,
             lag: lag_periods(cube_root(t3)) as f32 * per as f32,
@@ -118,6 +127,8 @@ impl Settings {
                 cfg.gains.stick_band[0] as f32,
                 cfg.gains.stick_band[1] as f32,
             ],
+            quantum: [cfg.scale.res[0] as f32, cfg.scale.res[1] as f32],
+            reading_gain: t3 as f32,
             local_bins: 4,
             level_learn: 16,
             restarts_learn: breakaway::WARM,
@@ -239,6 +250,9 @@ pub struct Monitor {
     maps: [[SlidingMap; 2]; N],
     checks: [[Checks; 2]; N],
     breakaway: [BreakawayWatch; N],
+    /// Mass [kg] an axis sets moving from rest (its diagonal inertia less the payload, which
+    /// hangs and follows only later).
+    mass: [f32; N],
     residual: [ResidualWatch; N],
     sliding_for: [u32; N],
     last_dir: [Option<usize>; N],
@@ -272,7 +286,12 @@ impl Monitor {
     pub fn new<R: Real>(obs: &Observer<R>, settings: Settings) -> Self {
         let ax = &obs.twin().coeffs().axes;
         let travel = |i: usize| (ax[i].min.to_f64() as f32, ax[i].max.to_f64() as f32);
-        Self::with_travel([travel(0), travel(1)], settings)
+        let c = obs.twin().coeffs();
+        let mass = [
+            (c.m00 - c.mp).to_f64() as f32,
+            (c.m11 - c.mp).to_f64() as f32,
+        ];
+        Self::with_travel([travel(0), travel(1)], mass, settings)
     }
 
     /// A monitor of a twin with parameters `params` (the same as [`Monitor::new`] for an
@@ -280,16 +299,20 @@ impl Monitor {
     pub fn for_params(params: &crane_model::Params, settings: Settings) -> Self {
         let axes = params.axes();
         let travel = |i: usize| (axes[i].min as f32, axes[i].max as f32);
-        Self::with_travel([travel(0), travel(1)], settings)
+        let c = crane_model::Coeffs::<f64>::new(params);
+        let mass = [(c.m00 - c.mp) as f32, (c.m11 - c.mp) as f32];
+        Self::with_travel([travel(0), travel(1)], mass, settings)
     }
 
-    /// An empty monitor whose maps cover `travel` `(lo, hi)` [m] per watched axis.
-    fn with_travel(travel: [(f32, f32); N], settings: Settings) -> Self {
+    /// An empty monitor whose maps cover `travel` `(lo, hi)` [m] per watched axis, whose axes
+    /// set `mass` [kg] moving from rest.
+    fn with_travel(travel: [(f32, f32); N], mass: [f32; N], settings: Settings) -> Self {
         Monitor {
             settings,
             maps: travel.map(|(lo, hi)| [SlidingMap::new(lo, hi), SlidingMap::new(lo, hi)]),
             checks: [[Checks::default(); 2]; N],
             breakaway: [BreakawayWatch::default(); N],
+            mass,
             residual: [ResidualWatch::default(); N],
             sliding_for: [0; N],
             last_dir: [None; N],
@@ -402,11 +425,22 @@ impl Monitor {
             Mode::Negative => Some(0usize),
             Mode::Stopped => None,
         };
-        let (band, min_stop) = (self.settings.band[i], self.settings.min_stop);
-        if let Some((dj, push)) = self.breakaway[i].period(dir.is_none(), x, force, band, min_stop)
-        {
-            let model = dry_at(ax, mode_of(dj), state.q[i]).to_f64() as f32;
-            self.restart(i, dj, x, push, model, learning);
+        let reading = x + self.settings.reading_gain * obs.innovation()[i].to_f64() as f32;
+        let sense = Sense {
+            stopped: dir.is_none(),
+            x,
+            reading,
+            force,
+        };
+        let limits = Limits {
+            band: self.settings.band[i],
+            quantum: self.settings.quantum[i],
+            min_stop: self.settings.min_stop,
+        };
+        if let Some(b) = self.breakaway[i].period(sense, limits) {
+            let model = dry_at(ax, mode_of(b.dir), state.q[i]).to_f64() as f32;
+            let force = b.estimate(self.mass[i], self.settings.quantum[i], self.settings.period);
+            self.restart(i, b.dir, x, force, model, learning);
         }
         if self.last_dir[i].is_some() && self.last_dir[i] != dir {
             if let Some(dl) = self.last_dir[i] {
@@ -472,7 +506,14 @@ impl Monitor {
         };
         let sliding = model + seen;
         if sliding > 0.25 * model && sliding > 0.0 {
-            let learn = learning || !self.checks[i][dj].stiction.standing();
+            // Once learned, the statistics follow only a recent ratio within half the alarm
+            // threshold of them, while no stiction alarm stands: a rise is not taught once it
+            // is half-way to an alarm, however slowly it comes. (With the whole threshold as
+            // the gate, a ratio rising 1.0 -> 1.8 on the independent plant taught its learned
+            // mean 0.2 and its scatter 30 % before it was raised, which halved its score.)
+            let k2 = 0.25 * self.settings.k * self.settings.k;
+            let inside = self.breakaway[i].inside(dj, self.settings.restarts_learn, k2);
+            let learn = learning || (inside && !self.checks[i][dj].stiction.standing());
             self.breakaway[i].record(dj, push / sliding, learn, self.settings.restarts_learn);
         }
     }
@@ -688,7 +729,7 @@ impl Monitor {
             return None;
         }
         let (mean, var, cur) = self.breakaway[i].stats(dj, self.settings.restarts_learn)?;
-        let band = var * breakaway::RECENT / (2.0 - breakaway::RECENT);
+        let band = breakaway::recent_band(var);
         let e = cur - mean;
         self.checks[i][dj]
             .stiction
