@@ -270,6 +270,11 @@ impl BreakawayWatch {
         }
     }
 
+    /// Restarts in direction `dir` whose ratio was learned (saturating).
+    pub fn restarts(&self, dir: usize) -> u16 {
+        self.n.get(dir).copied().unwrap_or(0)
+    }
+
     /// Learned mean ratio, its variance per restart, and the current ratio of direction
     /// `dir`; `None` until `warm` restarts were seen.
     pub fn stats(&self, dir: usize, warm: u16) -> Option<(f32, f32, f32)> {

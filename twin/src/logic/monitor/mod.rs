@@ -9,11 +9,15 @@
 //! - an axis that rests feeds its breakaway watch ([`breakaway::BreakawayWatch`]);
 //! - the residual mean square feeds a slow level per axis.
 //!
-//! Commissioning: for [`Settings::commissioning`] periods nothing is judged; the maps learn
-//! their reference (what the identified model still misses on this rig) and their bands (how
-//! much the current levels scatter around it in normal operation). Afterwards references and
-//! bands follow slow changes (a temperature drift over an hour) while no alarm of their map
-//! stands.
+//! Commissioning ends on coverage, not on a clock ([`Monitor::commissioned`]): until every
+//! watched axis has, in each direction, [`Settings::restarts_learn`] restarts and
+//! [`Settings::level_learn`] moves over at least [`MOVE_BINS`] judged bins (each with
+//! [`map::MapSettings::judged`] samples), and the residual level has learned over
+//! [`RESIDUAL_LEARN`] periods, nothing is judged; the maps learn their reference (what the
+//! identified model still misses on this rig) and their bands (how much the current levels
+//! scatter around it in normal operation). How long that takes follows how the crane is
+//! operated. Afterwards references and bands follow slow changes (a temperature drift over an
+//! hour) while no alarm of their map stands.
 //!
 //! Evaluation: one of the six maps (axis, direction) per period, round robin, O(64) work.
 //! Every threshold is [`Settings::k`] standard deviations of a learned scatter, never a force
@@ -66,7 +70,8 @@ pub struct Settings {
     pub k_local: f32,
     /// The control period [s].
     pub period: f32,
-    /// Periods of commissioning (nothing judged).
+    /// Least periods of commissioning (nothing judged); it ends on coverage
+    /// ([`Monitor::commissioned`]), not before this.
     pub commissioning: u64,
     /// Periods an axis must have slid before its samples are used (observer transient).
     pub settle: u32,
@@ -96,8 +101,8 @@ pub struct Settings {
 
 impl Settings {
     /// Settings for a loop `cfg`: the settle time from the observer's pole (`theta^3 = 1 -
-    /// alpha`, the transient below 1 %), the least speed from the encoder step, five minutes
-    /// of commissioning, 50 ms at rest for a breakaway, and a local change up to 4 bins wide
+    /// alpha`, the transient below 1 %), the least speed from the encoder step, commissioning
+    /// on coverage alone (no least time), 50 ms at rest for a breakaway, and a local change up to 4 bins wide
     /// (3 cm on X: a rough spot, not a region).
     pub fn for_loop(cfg: &LoopConfig) -> Self {
         let t3 = 1.0 - cfg.gains.alpha;
@@ -118,7 +123,7 @@ impl Settings {
             k,
             k_local: 4.5,
             period: per as f32,
-            commissioning: (300.0 / per) as u64,
+            commissioning: 0,
             settle,
             lag: lag_periods(cube_root(t3)) as f32 * per as f32,
             v_min: [v(0), v(1)],
@@ -137,8 +142,10 @@ impl Settings {
 }
 
 impl Settings {
-    /// A short commissioning for the QEMU cross-check: 20 s, bins judged from 48 samples, the
-    /// travel level from 3 moves, the breakaway from 4 restarts. It trades the statistics'
+    /// A short commissioning for the QEMU cross-check: at least 20 s, bins judged from 48
+    /// samples, the travel level from 1 move, the breakaway from 4 restarts (on the rig's
+    /// `CHECK` run every direction has them by 15 s; with 3 moves X's positive direction had
+    /// only 2 in the 45 s). It trades the statistics'
     /// quality for a run short enough to simulate under QEMU; it is not for a rig.
     pub fn quick(cfg: &LoopConfig) -> Self {
         let per = if cfg.period > 0.0 { cfg.period } else { 2e-3 };
@@ -150,7 +157,7 @@ impl Settings {
                 ..s.map
             },
             commissioning: (20.0 / per) as u64,
-            level_learn: 3,
+            level_learn: 1,
             restarts_learn: 4,
             ..s
         }
@@ -206,6 +213,17 @@ struct Checks {
     level: f32,
 }
 
+/// What commissioning has seen of one axis and direction ([`Monitor::coverage`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Coverage {
+    /// Restarts from rest whose breakaway was learned.
+    pub restarts: u16,
+    /// Moves that gave the travel's level (each over at least [`MOVE_BINS`] judged bins).
+    pub moves: u32,
+    /// Bins with enough samples to be judged ([`MapSettings::judged`]).
+    pub judged: u8,
+}
+
 /// Moves of a map within which a bin must have had a sample to be judged by the local
 /// check: a bin not crossed for longer is stale evidence while the travel changes slowly.
 const FRESH_MOVES: u16 = 8;
@@ -214,7 +232,7 @@ const FRESH_MOVES: u16 = 8;
 const LEVEL_SLOW: f32 = 1.0 / 256.0;
 /// Judged bins a move must cross to give a level (a median of fewer is no travel level: a
 /// rough spot of up to `local_bins` would move it).
-const MOVE_BINS: usize = 9;
+pub const MOVE_BINS: usize = 9;
 
 /// Median of `v` (reordered), 0 for an empty slice.
 fn median(v: &mut [f32]) -> f32 {
@@ -242,6 +260,11 @@ struct ResidualWatch {
 const RESIDUAL_WEIGHT: f32 = 1.0 / 500.0;
 /// Periods between two checks of the residual level (half its memory).
 const RESIDUAL_EVERY: u64 = 250;
+/// Periods over which the residual level's mean and scatter are learned (after it forgot its
+/// start) before commissioning may end: ten of its memories.
+pub const RESIDUAL_LEARN: u32 = (10.0 / RESIDUAL_WEIGHT) as u32;
+/// Periods the residual level needs to forget its start: five memories.
+const RESIDUAL_START: u32 = (5.0 / RESIDUAL_WEIGHT) as u32;
 
 /// The monitor of the three drive axes.
 #[derive(Clone, Debug)]
@@ -258,6 +281,8 @@ pub struct Monitor {
     last_dir: [Option<usize>; N],
     pending: [Option<Alarm>; 4],
     period: u64,
+    /// Commissioning is over (latched: it ends once).
+    commissioned: bool,
 }
 
 fn dir_of(d: usize) -> Direction {
@@ -318,6 +343,7 @@ impl Monitor {
             last_dir: [None; N],
             pending: [None; 4],
             period: 0,
+            commissioned: false,
         }
     }
 
@@ -346,9 +372,11 @@ impl Monitor {
         self.breakaway.get(axis.index())
     }
 
-    /// Whether commissioning is over.
+    /// Whether commissioning is over: at least [`Settings::commissioning`] periods, and the
+    /// coverage of [`Monitor::covered`] was reached (it ends once, and the monitor judges from
+    /// then on).
     pub fn commissioned(&self) -> bool {
-        self.period >= self.settings.commissioning
+        self.commissioned
     }
 
     /// Periods seen.
@@ -356,22 +384,45 @@ impl Monitor {
         self.period
     }
 
-    /// Whether the monitor judges everything it watches: commissioning is over and, on every
-    /// watched axis and direction, the travel's level has learned its band
-    /// ([`Settings::level_learn`] moves over judged bins) and the breakaway ratio its spread
-    /// ([`Settings::restarts_learn`] restarts). Until then a change is learned as the reference,
-    /// not alarmed: a fault that begins before it goes unseen. How long that takes depends on
-    /// how the crane is operated (the moves' coverage of the travel), not on a clock.
-    pub fn ready(&self) -> bool {
-        self.commissioned()
-            && (0..AXES.len()).all(|i| {
-                (0..2).all(|dj| {
-                    self.checks[i][dj].level_n >= self.settings.level_learn
-                        && self.breakaway[i]
-                            .stats(dj, self.settings.restarts_learn)
-                            .is_some()
+    /// What commissioning has seen of `axis` moving in `dir` (`Both` gives the positive
+    /// direction); `None` for an axis not watched.
+    pub fn coverage(&self, axis: Axis, dir: Direction) -> Option<Coverage> {
+        let i = AXES.iter().position(|a| *a == axis)?;
+        let d = usize::from(dir != Direction::Negative);
+        let s = &self.settings.map;
+        let map = &self.maps[i][d];
+        Some(Coverage {
+            restarts: self.breakaway[i].restarts(d),
+            moves: self.checks[i][d].level_n,
+            judged: (0..BINS).filter(|b| map.view(*b, s).judged).count() as u8,
+        })
+    }
+
+    /// Whether the statistics every check needs are learned: on every watched axis and in
+    /// each direction the breakaway ratio over [`Settings::restarts_learn`] restarts and the
+    /// travel's level over [`Settings::level_learn`] moves that each crossed at least
+    /// [`MOVE_BINS`] judged bins (bins with [`MapSettings::judged`] samples), and the
+    /// residual level of every axis over [`RESIDUAL_LEARN`] periods.
+    pub fn covered(&self) -> bool {
+        let residual = self
+            .residual
+            .iter()
+            .all(|w| w.n >= RESIDUAL_START.saturating_add(RESIDUAL_LEARN));
+        residual
+            && (0..N).all(|i| {
+                (0..2).all(|d| {
+                    self.checks[i][d].level_n >= self.settings.level_learn
+                        && self.breakaway[i].restarts(d) >= self.settings.restarts_learn
                 })
             })
+    }
+
+    /// Whether the monitor judges everything it watches: commissioning is over
+    /// ([`Monitor::commissioned`]). Until then a change is learned as the reference, not
+    /// alarmed: a fault that begins before it goes unseen. How long that takes depends on how
+    /// the crane is operated (the moves' coverage of the travel), not on a clock.
+    pub fn ready(&self) -> bool {
+        self.commissioned
     }
 
     /// Whether the monitor judges the friction map of `axis` now: its residual is within its
@@ -388,7 +439,10 @@ impl Monitor {
     /// drivers applied during the period the observer just predicted. Returns an alarm raised
     /// in this period or earlier and not yet returned (at most one per call).
     pub fn update<R: Real>(&mut self, obs: &Observer<R>, applied: [R; 3]) -> Option<Alarm> {
-        let learning = !self.commissioned();
+        if !self.commissioned && self.period >= self.settings.commissioning && self.covered() {
+            self.commissioned = true;
+        }
+        let learning = !self.commissioned;
         let pull = self.swing_pull(obs);
         for (i, p) in pull.iter().enumerate() {
             self.axis_period(obs, i, applied[i], *p, learning);
@@ -546,7 +600,7 @@ impl Monitor {
         let w = &mut self.residual[i];
         w.level += RESIDUAL_WEIGHT * (m - w.level);
         // Learn the level's mean and scatter once it has forgotten its start (5 memories).
-        let start = (5.0 / RESIDUAL_WEIGHT) as u32;
+        let start = RESIDUAL_START;
         w.n = w.n.saturating_add(1);
         if learning && w.n > start {
             let k = (w.n - start) as f32;
