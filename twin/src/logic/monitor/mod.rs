@@ -657,8 +657,8 @@ impl Monitor {
     /// median change of the judged bins it crossed (a rough spot moves a few bins, not the
     /// median; bins the move did not cross are not stale evidence). Moves over fewer than
     /// [`MOVE_BINS`] judged bins give no level. The level's band is its variance over moves,
-    /// learned over [`Settings::level_learn`] moves, then tracked slowly by the levels within half
-    /// the threshold while no alarm of the map stands. Also refreshes the pooled band (mean band of the judged bins).
+    /// learned over [`Settings::level_learn`] moves, then tracked slowly by the levels inside it while
+    /// no alarm of the map stands. Also refreshes the pooled band (mean band of the judged bins).
     fn move_done(&mut self, i: usize, dj: usize, learning: bool) {
         let s = self.settings.map;
         let k2 = self.settings.k * self.settings.k;
@@ -694,12 +694,7 @@ impl Monitor {
         let standing = c.drift.standing() || c.local.standing();
         let learned = c.level_n >= self.settings.level_learn;
         let inside = level * level <= k2 * c.level_band;
-        // Once learned, the band follows only levels within half the threshold (as the
-        // breakaway's statistics): a rise half-way to an alarm is not taught. (With the whole
-        // threshold, dry friction +30 % on the independent plant widened X's band from 0.064
-        // to 0.18 N in three moves, and no drift was raised.)
-        let teach = level * level <= 0.25 * k2 * c.level_band;
-        if !learned || (!standing && teach) {
+        if !learned || (!standing && inside) {
             c.level_n = c.level_n.saturating_add(1);
             let w = 1.0 / c.level_n as f32;
             let w = if w > LEVEL_SLOW { w } else { LEVEL_SLOW };
