@@ -23,7 +23,7 @@
 //! The ratio of that force to the sliding friction there (the model's dry level plus what the
 //! map's reference adds) is one sample of the stiction ratio. Per direction: the
 //! commissioning mean and variance of the ratio over the first `WARM` restarts (Welford),
-//! then an exponentially forgetting current ratio (weight [`RECENT`]). Memory: 80 bytes per
+//! then an exponentially forgetting current ratio (weight [`RECENT`]). Memory: 88 bytes per
 //! axis.
 
 /// Consecutive encoder readings out of the anchor's count that make an onset, and back at it

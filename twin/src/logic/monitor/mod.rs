@@ -26,7 +26,7 @@
 //! evaluations with fresh data between them (a new pass over a bin, half a memory of the
 //! travel level, a new restart, half a second of residual).
 //!
-//! State: everything lives in this struct (about 7.5 KiB, see [`Monitor::RAM_BYTES`]), no heap,
+//! State: everything lives in this struct (about 6.9 KiB, see [`Monitor::RAM_BYTES`]), no heap,
 //! `f32` statistics whatever the twin's scalar type. It is not kept over a reset: after a
 //! watchdog reset the firmware builds a new monitor, which commissions again and judges
 //! nothing meanwhile (an alarm that stood is raised again if its cause is still there).
