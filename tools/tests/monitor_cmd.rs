@@ -44,6 +44,7 @@ fn the_sample_log_decodes_into_table_json_and_plot() {
     );
     assert_eq!(table.matches("local_friction").count(), 2, "{table}");
     assert!(table.contains("position 0.3116797 m"), "{table}");
+    assert!(table.contains("restarts/moves/judged"), "{table}");
 
     let json = std::fs::read_to_string(d.join("out/monitor.json")).expect("monitor.json");
     let r: Report = serde_json::from_str(&json).expect("the report parses back");
@@ -83,6 +84,24 @@ fn the_sample_log_decodes_into_table_json_and_plot() {
             }
         }
         assert_eq!(s.last_maps().len(), 4, "{}", s.tag);
+        // readiness: commissioning (at least 20 s, then on coverage) is not over at 15 s, over
+        // at 30 s; the coverage counts only grow
+        for m in &s.maps {
+            assert_eq!(
+                m.ready,
+                Some(m.period >= 15001),
+                "{} period {}",
+                s.tag,
+                m.period
+            );
+            let c = m.coverage.expect("coverage fields");
+            assert!(c.judged as usize <= m.bins, "{} {c:?}", s.tag);
+            if m.ready == Some(true) {
+                assert!(c.restarts >= 4 && c.moves >= 1, "{} {c:?}", s.tag);
+            }
+        }
+        let ready = s.maps.iter().filter(|m| m.ready == Some(true)).count();
+        assert_eq!(ready, 8, "{}", s.tag);
         // the local change shows in the last X maps, at the alarm's place
         for m in s.last_maps().iter().filter(|m| m.axis == Axis::X) {
             assert!(

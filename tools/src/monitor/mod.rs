@@ -189,6 +189,12 @@ pub struct Map {
     pub slope: f32,
     /// Speed the slope is centred on [m/s].
     pub v0: f32,
+    /// Whether the monitor was ready (commissioning over, it judges) at this summary; `null`
+    /// for a log of a firmware without the field.
+    pub ready: Option<bool>,
+    /// What commissioning had seen of this axis and direction (`null` without the fields):
+    /// restarts from rest learned, moves that gave the travel's level, bins judged.
+    pub coverage: Option<Coverage>,
     /// Reference row [mN] per bin (`null`: no sample yet); the whole row is `null` when the
     /// log has no `what=ref` row for this summary (a truncated capture).
     #[serde(rename = "ref_mN")]
@@ -201,6 +207,18 @@ pub struct Map {
     pub band_mn: Option<Vec<Option<i32>>>,
     /// Bins where `|cur - ref| > OUT_OF_BAND_K * band`.
     pub out_of_band: Vec<OutOfBand>,
+}
+
+/// What commissioning has seen of one axis and direction (the `MSUM` fields `restarts`,
+/// `moves`, `judged`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Coverage {
+    /// Restarts from rest whose breakaway was learned.
+    pub restarts: u32,
+    /// Moves that gave the travel's level.
+    pub moves: u32,
+    /// Bins with enough samples to be judged.
+    pub judged: u32,
 }
 
 impl Map {

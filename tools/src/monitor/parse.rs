@@ -8,7 +8,9 @@
 //! tagged [`IMPLICIT_TAG`]; an `MBEGIN` while a section is open ends that one without a hash.
 //! Floats are parsed as `f32`, so the firmware's shortest round-trip form gives its exact bits.
 
-use super::{report, Alarm, AlarmKind, Axis, Dir, Error, Map, Report, Section, IMPLICIT_TAG};
+use super::{
+    report, Alarm, AlarmKind, Axis, Coverage, Dir, Error, Map, Report, Section, IMPLICIT_TAG,
+};
 use std::io::Read;
 use std::path::Path;
 
@@ -279,6 +281,8 @@ impl Parser {
             level_sd: f.f32("level_sd")?,
             slope: f.f32("slope")?,
             v0: f.f32("v0")?,
+            ready: f.flag("ready")?,
+            coverage: coverage(&mut f)?,
             ref_mn: None,
             cur_mn: None,
             band_mn: None,
@@ -347,6 +351,27 @@ fn row_values(text: &str, bins: usize) -> Result<Vec<Option<i32>>, String> {
             }),
         })
         .collect()
+}
+
+/// The coverage fields of an `MSUM` (`restarts`, `moves`, `judged`): all or none.
+fn coverage(f: &mut Fields<'_>) -> Result<Option<Coverage>, String> {
+    let keys = ["restarts", "moves", "judged"];
+    let n = keys.iter().filter(|k| f.has(k)).count();
+    if n == 0 {
+        return Ok(None);
+    }
+    if n < keys.len() {
+        return Err("fields restarts, moves and judged come together".to_string());
+    }
+    let mut v = [0u32; 3];
+    for (x, k) in v.iter_mut().zip(keys) {
+        *x = f.parse(k, "a count (unsigned integer)")?;
+    }
+    Ok(Some(Coverage {
+        restarts: v[0],
+        moves: v[1],
+        judged: v[2],
+    }))
 }
 
 /// The `key=value` words of a frame; each key must appear once and be used.
@@ -423,6 +448,23 @@ impl<'a> Fields<'a> {
         }
     }
 
+    /// Whether `key` is there (an older firmware's frame may lack it).
+    fn has(&self, key: &str) -> bool {
+        self.pairs.iter().any(|p| p.0 == key)
+    }
+
+    /// An optional `0`/`1` field.
+    fn flag(&mut self, key: &str) -> Result<Option<bool>, String> {
+        if !self.has(key) {
+            return Ok(None);
+        }
+        match self.get(key)? {
+            "0" => Ok(Some(false)),
+            "1" => Ok(Some(true)),
+            other => Err(format!("field {key}: `{other}` is not 0 or 1")),
+        }
+    }
+
     /// Refuses fields that were not used.
     fn finish(self) -> Result<(), String> {
         match self.pairs.iter().find(|p| !p.2) {
@@ -438,6 +480,31 @@ mod tests {
 
     fn one(text: &str) -> Result<Report, Error> {
         parse(text.as_bytes(), Path::new("run.log"), 0.002)
+    }
+
+    #[test]
+    fn a_summary_carries_readiness_and_coverage_or_neither() {
+        let head = "MSUM period=5 axis=X dir=- lo=0 hi=1 bins=4 level=0 level_sd=0 slope=0 v0=0";
+        let r = one(&format!("{head} ready=1 restarts=32 moves=16 judged=3\n")).unwrap();
+        let m = &r.sections[0].maps[0];
+        assert_eq!(m.ready, Some(true));
+        let c = Coverage {
+            restarts: 32,
+            moves: 16,
+            judged: 3,
+        };
+        assert_eq!(m.coverage, Some(c));
+        // an older firmware's summary has neither
+        let r = one(&format!("{head}\n")).unwrap();
+        assert_eq!(
+            (r.sections[0].maps[0].ready, r.sections[0].maps[0].coverage),
+            (None, None)
+        );
+        let message = |t: String| one(&t).unwrap_err().to_string();
+        assert!(message(format!("{head} ready=2\n")).contains("field ready: `2` is not 0 or 1"));
+        assert!(message(format!("{head} restarts=1 moves=2\n")).contains("come together"));
+        assert!(message(format!("{head} restarts=1 moves=2 judged=-1\n"))
+            .contains("field judged: `-1` is not a count"));
     }
 
     #[test]

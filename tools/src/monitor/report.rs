@@ -126,13 +126,21 @@ fn section(t: &mut String, s: &Section) {
     );
     let _ = writeln!(
         t,
-        "    {:>10}  {:<4} {:<3}  {:>9}  {:>12}  {:>13}  {:>5}  out of band",
-        "time [s]", "axis", "dir", "level [N]", "level_sd [N]", "slope [N s/m]", "bins"
+        "    {:>10}  {:<4} {:<3}  {:>9}  {:>12}  {:>13}  {:>5}  {:>5}  {:>20}  out of band",
+        "time [s]",
+        "axis",
+        "dir",
+        "level [N]",
+        "level_sd [N]",
+        "slope [N s/m]",
+        "bins",
+        "ready",
+        "restarts/moves/judged"
     );
     for m in maps {
         let _ = writeln!(
             t,
-            "    {:>10.3}  {:<4} {:<3}  {:>9.4}  {:>12.4}  {:>13.4}  {:>5}  {}",
+            "    {:>10.3}  {:<4} {:<3}  {:>9.4}  {:>12.4}  {:>13.4}  {:>5}  {:>5}  {:>20}  {}",
             m.time_s,
             m.axis.name(),
             m.dir.name(),
@@ -140,6 +148,15 @@ fn section(t: &mut String, s: &Section) {
             m.level_sd,
             m.slope,
             format!("{}/{}", m.bins_with_data(), m.bins),
+            match m.ready {
+                Some(true) => "yes",
+                Some(false) => "no",
+                None => "-",
+            },
+            m.coverage.map_or("-".to_string(), |c| format!(
+                "{}/{}/{}",
+                c.restarts, c.moves, c.judged
+            )),
             out_of_band_cell(m)
         );
     }

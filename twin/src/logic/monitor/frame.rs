@@ -6,7 +6,11 @@
 //!   size fields are those of [`AlarmKind`]: `change=<N>`; `position=<m> width=<m>
 //!   change=<N>`; `ratio=<1> learned=<1>`; `mean_square=<m^2> learned=<m^2>`.
 //! - `MSUM period=<u64> axis=<X|Y> dir=<+|-> lo=<m> hi=<m> bins=<n> level=<N>
-//!   level_sd=<N> slope=<N s/m> v0=<m/s>`: a map's summary;
+//!   level_sd=<N> slope=<N s/m> v0=<m/s> ready=<0|1> restarts=<n> moves=<n> judged=<n>`: a
+//!   map's summary; `ready` is the monitor's ([`Monitor::ready`]: commissioning is over, it
+//!   judges), `restarts`, `moves` and `judged` what commissioning has seen of this axis and
+//!   direction ([`super::Coverage`]: restarts learned, moves that gave the travel's level,
+//!   bins with enough samples to be judged);
 //! - `MMAP period=<u64> axis=<X|Y> dir=<+|-> what=<ref|cur|band> mN=<v0>,<v1>,...`: one row
 //!   of a map in millinewtons, rounded and saturated to ±99,999 (`band` is the band's standard
 //!   deviation), `_` for a bin with no sample yet.
@@ -114,17 +118,23 @@ pub fn write_maps<W: Write>(out: &mut W, m: &Monitor) -> fmt::Result {
     let period = m.period();
     for axis in AXES {
         for dir in [Direction::Negative, Direction::Positive] {
-            let (Some(map), Some((level, band))) = (m.map(axis, dir), m.level(axis, dir)) else {
+            let (Some(map), Some((level, band)), Some(cov)) =
+                (m.map(axis, dir), m.level(axis, dir), m.coverage(axis, dir))
+            else {
                 continue;
             };
             let (slope, v0) = map.viscous_slope();
             let (lo, hi) = map.travel();
             writeln!(
                 out,
-                "MSUM period={period} axis={} dir={} lo={lo} hi={hi} bins={BINS} level={level} level_sd={} slope={slope} v0={v0}",
+                "MSUM period={period} axis={} dir={} lo={lo} hi={hi} bins={BINS} level={level} level_sd={} slope={slope} v0={v0} ready={} restarts={} moves={} judged={}",
                 axis_name(axis),
                 dir_name(dir),
                 sqrt(band),
+                u8::from(m.ready()),
+                cov.restarts,
+                cov.moves,
+                cov.judged,
             )?;
             let head = (period, axis, dir);
             write_row(out, head, "ref", map, |b| map.reference(b))?;
