@@ -141,6 +141,14 @@ pub enum Flag {
         /// The floor used [kg or kg m^2, input units per acceleration].
         floor: f64,
     },
+    /// The inertia's time constant with the viscous friction is below [`UNRESOLVED_TAU`] of
+    /// the sample period: the log does not measure it (treated as at its floor).
+    InertiaUnresolved {
+        /// `inertia / viscous` [s].
+        time_constant: f64,
+        /// The fitting runs' shortest sample period [s].
+        period: f64,
+    },
     /// Too few sliding samples in this direction: its friction is not fitted but copied
     /// from the other direction.
     DirectionNotFitted {
@@ -191,6 +199,13 @@ impl fmt::Display for Flag {
             Flag::InertiaAtFloor { floor } => write!(
                 f,
                 "inertia not identifiable from the sliding samples: held at its floor {floor:.4}"
+            ),
+            Flag::InertiaUnresolved {
+                time_constant,
+                period,
+            } => write!(
+                f,
+                "inertia not identifiable from the sliding samples: its time constant with the viscous friction, {time_constant:.2e} s, is below {UNRESOLVED_TAU} of the sample period {period:.2e} s (the velocity would settle within a sample whatever the inertia); the derivative window may hold too few fresh positions"
             ),
             Flag::DirectionNotFitted { dir, samples } => write!(
                 f,
@@ -437,6 +452,9 @@ pub fn estimate(
     for d in 0..2 {
         kin[d] = kin[d].min(brk[d]);
     }
+    if let Some(f) = unresolved(fit, ls.inertia, visc) {
+        flags.push(f);
+    }
     let params = drive_params(motion, center, &s, &ls, kin, visc, brk);
     Ok(Estimate {
         params,
@@ -628,6 +646,27 @@ struct LsFit {
     /// Amplitude of the bump (0 without [`Structure::bump`]).
     bump: f64,
     flags: Vec<Flag>,
+}
+
+/// A time constant `inertia / viscous` below this fraction of the sample period is not
+/// measured by the log: the velocity then settles within a sample (to `e^-10`) whatever the
+/// inertia.
+pub const UNRESOLVED_TAU: f64 = 0.1;
+
+/// [`Flag::InertiaUnresolved`] when the fitted inertia's time constant with the larger
+/// viscous coefficient is below [`UNRESOLVED_TAU`] of the fitting runs' shortest sample
+/// period. Such an inertia is a derivative artefact, not a measurement (a 5 kHz log whose
+/// window held 4 fresh positions gave `1.2e-4` against a true `1.06`, and each simulation of
+/// that stiff model took thousands of steps per sample: 156 s for a 45,000-row log).
+fn unresolved(fit: &[&Prepared], inertia: f64, visc: [f64; 2]) -> Option<Flag> {
+    let dt = fit.iter().map(|p| p.run.dt).fold(f64::INFINITY, f64::min);
+    let tau = inertia / visc[0].max(visc[1]);
+    (dt.is_finite() && tau.is_finite() && tau < UNRESOLVED_TAU * dt).then_some(
+        Flag::InertiaUnresolved {
+            time_constant: tau,
+            period: dt,
+        },
+    )
 }
 
 /// Rows are `(F, a, shape, v, x)`. With `fixed_kinetic` the dry levels are moved to the
@@ -924,6 +963,34 @@ pub fn std_dev(v: &[f64]) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::drive::prep::DriveRun;
+
+    #[test]
+    fn an_inertia_the_log_cannot_resolve_is_flagged() {
+        let run = |dt: f64| {
+            let t: Vec<f64> = (0..10).map(|k| k as f64 * dt).collect();
+            Prepared::new(DriveRun {
+                name: "r".into(),
+                held_out: false,
+                dt,
+                x: vec![0.0; 10],
+                u: vec![0.0; 10],
+                refresh: 1,
+                input_at: t.clone(),
+                read_at: t,
+            })
+        };
+        let (fine, coarse) = (run(1e-4), run(1e-3));
+        // time constant 1e-5 s: a tenth of 1e-4 s is resolved, not below a tenth of 1e-3 s
+        assert!(unresolved(&[&fine], 1e-5, [1.0, 0.5]).is_none());
+        assert!(unresolved(&[&coarse, &fine], 1e-5, [0.5, 1.0]).is_none());
+        assert!(matches!(
+            unresolved(&[&coarse], 1e-5, [0.5, 1.0]),
+            Some(Flag::InertiaUnresolved { period, .. }) if period == 1e-3
+        ));
+        // no viscous friction: no time constant, nothing to say
+        assert!(unresolved(&[&coarse], 1e-5, [0.0, 0.0]).is_none());
+    }
 
     #[test]
     fn bounded_ls_holds_a_negative_coefficient_at_its_bound() {

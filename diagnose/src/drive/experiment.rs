@@ -64,11 +64,15 @@ impl Baseline {
     }
 }
 
-/// Whether a model's inertia sits at its floor (not determined by the sliding samples).
+/// Whether a model's inertia sits at its floor or is below what the log resolves (not
+/// determined by the sliding samples).
 pub fn at_floor(est: &Estimate) -> bool {
-    est.flags
-        .iter()
-        .any(|f| matches!(f, Flag::InertiaAtFloor { .. }))
+    est.flags.iter().any(|f| {
+        matches!(
+            f,
+            Flag::InertiaAtFloor { .. } | Flag::InertiaUnresolved { .. }
+        )
+    })
 }
 
 impl<'a> Experiment<'a> {
@@ -94,8 +98,18 @@ impl<'a> Experiment<'a> {
     }
 
     /// Mean simulated position NMAE of the fitting runs [%] (infinite when one does not
-    /// simulate): the measure every grid-searched value is chosen by.
+    /// simulate): the measure every grid-searched value is chosen by. Infinite, without a
+    /// simulation, for a model whose inertia the log does not resolve
+    /// ([`Flag::InertiaUnresolved`]): no value is chosen by it, and its simulation would take
+    /// thousands of steps per sample.
     pub fn fit_error(&self, est: &Estimate) -> f64 {
+        if est
+            .flags
+            .iter()
+            .any(|f| matches!(f, Flag::InertiaUnresolved { .. }))
+        {
+            return f64::INFINITY;
+        }
         let v: Vec<f64> = self
             .fit
             .iter()

@@ -152,7 +152,7 @@ fn decide(ctx: &Context<'_>, sel: &Selection, fin: &Final) -> (Verdict, String) 
         (
             Verdict::Unexplained,
             format!(
-                "not identifiable: the fitting runs do not determine the inertia (it sits at its floor), so no cause is named; the baseline's held-out simulated position NMAE is {} (predicting no motion: {:.2} %); longer runs with several accelerations in each direction are needed",
+                "not identifiable: the fitting runs do not determine the inertia (it sits at its floor, or its time constant is below what the log resolves), so no cause is named; the baseline's held-out simulated position NMAE is {} (predicting no motion: {:.2} %); longer runs with several accelerations in each direction are needed",
                 pct(baseline.selection, 2), sel_no_motion
             ),
         )
