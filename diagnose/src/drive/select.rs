@@ -142,10 +142,10 @@ impl<'a> Context<'a> {
     }
 
     /// Whether a held-out error within [`NONE_LEVEL`] is also within [`OWN_LOG_FACTOR`] times
-    /// the log's own floor (or the encoder's, if larger): only then is it `none`.
+    /// the log's own floor (or the encoder's, if larger): only then is it `none`. Without an
+    /// own floor there is nothing to compare with, and it is.
     pub fn consistent(&self, e: f64) -> bool {
-        self.own_floor
-            .is_none_or(|f| e <= OWN_LOG_FACTOR * f.max(self.noise_floor))
+        self.own_floor.is_none() || self.within_own_floor(e)
     }
 }
 
