@@ -384,8 +384,9 @@ pub struct FinalModel {
     pub offset: f64,
     /// Input dead band [input units].
     pub deadband: f64,
-    /// Input delay [samples of the fitting runs' period].
-    pub delay_samples: usize,
+    /// Input delay [samples of the fitting runs' period] (fractional on single-axis open-loop
+    /// data, whole elsewhere).
+    pub delay_samples: f64,
     /// Input delay [s].
     #[serde(default)]
     pub delay_s: f64,

@@ -31,8 +31,8 @@ import score as S  # noqa: E402
 # can move a quantised sample by a count; a regression of two cases in one cause fails.
 MEASURED_RIGHT = {
     "none": 10, "stiction": 6, "stribeck_friction": 1, "localized_friction": 6,
-    "input_deadzone": 4, "input_saturation": 6, "input_delay": 3, "restoring_force": 6,
-    "force_offset": 6, "direction_asymmetry": 6, "load_dependent_friction": 0,
+    "input_deadzone": 4, "input_saturation": 6, "input_delay": 4, "restoring_force": 6,
+    "force_offset": 6, "direction_asymmetry": 6, "load_dependent_friction": 1,
 }
 FLOORS = {c: max(MEASURED_RIGHT[c] - 1, 0) / C.CAUSE_COUNTS[c] for c in C.CAUSES}
 

@@ -74,8 +74,9 @@ pub struct Structure {
     pub offset: bool,
     /// Input dead band [input units] (>= 0; fixed, searched on a grid by the caller).
     pub deadband: f64,
-    /// Input delay [samples] (fixed, searched on a grid by the caller).
-    pub delay: usize,
+    /// Input delay [samples] (>= 0, fractional: the input is read between samples, see
+    /// [`delayed`]; fixed, searched on a grid and refined by the caller).
+    pub delay: f64,
     /// Input saturation level [input units]: the effort applied is `clamp(u, -s, +s)`;
     /// `0`: no saturation (fixed, searched on a grid by the caller).
     pub saturation: f64,
@@ -230,7 +231,7 @@ impl fmt::Display for Flag {
 #[derive(Clone, Debug)]
 pub struct Estimate {
     /// Parameters for the simulator (input units, `gain = 1`, `delay_steps = 0`: the delay is
-    /// applied to the recorded input in whole samples, see [`Structure::delay`]).
+    /// applied to the recorded input, see [`Structure::delay`]).
     pub params: DriveParams,
     /// The structure.
     pub structure: Structure,
@@ -293,11 +294,34 @@ pub fn restoring_shape(motion: Motion, x: f64, center: f64) -> f64 {
     }
 }
 
-/// The input a structure applies at sample `i` of a run: delayed by whole samples (the first
-/// value held before the record starts), saturated and dead-banded [input units].
+/// The recorded input `u` read `delay` samples before sample `i` [input units]: the first
+/// value is held before the record starts, and between samples the two neighbours are
+/// weighted linearly. For a zero-order-held input delayed by `n + f` sample periods (`n`
+/// whole, `0 <= f < 1`), that weighting is the input's exact mean over the period `i`:
+/// `f u[i-n-1] + (1-f) u[i-n]`. A whole delay reads one sample exactly.
+pub fn delayed(u: &[f64], i: usize, delay: f64) -> f64 {
+    let Some(&first) = u.first() else {
+        return 0.0;
+    };
+    let t = i as f64 - delay;
+    if t.is_nan() || t <= 0.0 {
+        return first;
+    }
+    let j = t.floor();
+    let f = t - j;
+    let a = u.get(j as usize).copied().unwrap_or(first);
+    if f == 0.0 {
+        a
+    } else {
+        let b = u.get(j as usize + 1).copied().unwrap_or(a);
+        a + f * (b - a)
+    }
+}
+
+/// The input a structure applies at sample `i` of a run: delayed ([`delayed`]), saturated
+/// and dead-banded [input units].
 pub fn applied_input(u: &[f64], i: usize, s: &Structure) -> f64 {
-    let j = i.saturating_sub(s.delay);
-    deadband(saturate(u.get(j).copied().unwrap_or(0.0), s), s.deadband)
+    deadband(saturate(delayed(u, i, s.delay), s), s.deadband)
 }
 
 /// `u` clamped to the structure's saturation level (`[-s, s]`; unchanged when `s` is 0).
@@ -963,6 +987,19 @@ pub fn std_dev(v: &[f64]) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_fractional_delay_reads_the_mean_of_a_held_input_over_the_period() {
+        let u = [1.0, 2.0, 4.0, 8.0];
+        // whole delays read one sample; before the record the first value is held
+        assert_eq!(delayed(&u, 3, 1.0), 4.0);
+        assert_eq!(delayed(&u, 3, 0.0), 8.0);
+        assert_eq!(delayed(&u, 1, 5.0), 1.0);
+        // 1.25 periods: a quarter of period 3 still sees u[1], the rest u[2]
+        assert_eq!(delayed(&u, 3, 1.25), 0.25 * 2.0 + 0.75 * 4.0);
+        assert_eq!(delayed(&[], 3, 1.25), 0.0);
+        assert_eq!(delayed(&u, 3, f64::NAN), 1.0);
+    }
     use crate::drive::prep::DriveRun;
 
     #[test]

@@ -97,7 +97,7 @@ pub fn own_log(
     center: f64,
     base: Structure,
 ) -> Option<f64> {
-    if est.structure.delay != 0 || est.structure.saturation != 0.0 {
+    if est.structure.delay != 0.0 || est.structure.saturation != 0.0 {
         return None;
     }
     let runs: Vec<DriveRun> = prepared

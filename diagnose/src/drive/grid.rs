@@ -44,6 +44,22 @@ pub fn delay_grid(dt: f64, shortest: usize) -> Vec<usize> {
     g
 }
 
+/// Points from `lo` to `hi` [any unit], both included, geometric, neighbours at most a factor
+/// `ratio` apart (the fewest points that do it); empty unless `0 < lo <= hi` and `ratio > 1`.
+pub fn geometric(lo: f64, hi: f64, ratio: f64) -> Vec<f64> {
+    if !(lo > 0.0 && hi >= lo && hi.is_finite() && ratio > 1.0) {
+        return Vec::new();
+    }
+    let n = ((hi / lo).ln() / ratio.ln()).ceil().clamp(0.0, 1e4) as usize;
+    if n == 0 {
+        return vec![lo];
+    }
+    let r = (hi / lo).powf(1.0 / n as f64);
+    let mut g: Vec<f64> = (0..n).map(|k| lo * r.powi(k as i32)).collect();
+    g.push(hi);
+    g
+}
+
 /// The best point found.
 #[derive(Clone, Debug)]
 pub struct Best<P, T> {
@@ -90,30 +106,67 @@ pub fn continuous<T>(
         keep(&mut best, k, g, r);
     }
     let k = best.as_ref()?.k;
-    let (mut a, mut b) = (grid[k.saturating_sub(1)], grid[(k + 1).min(grid.len() - 1)]);
-    if b > a && steps >= 2 {
-        let g = 0.5 * (5f64.sqrt() - 1.0);
-        let (mut c, mut d) = (b - g * (b - a), a + g * (b - a));
-        let r = eval(c);
-        let mut fc = keep(&mut best, k, c, r);
-        let r = eval(d);
-        let mut fd = keep(&mut best, k, d, r);
-        for _ in 2..steps {
-            if fc <= fd {
-                b = d;
-                (d, fd) = (c, fc);
-                c = b - g * (b - a);
-                let r = eval(c);
-                fc = keep(&mut best, k, c, r);
-            } else {
-                a = c;
-                (c, fc) = (d, fd);
-                d = a + g * (b - a);
-                let r = eval(d);
-                fd = keep(&mut best, k, d, r);
-            }
+    let (a, b) = (grid[k.saturating_sub(1)], grid[(k + 1).min(grid.len() - 1)]);
+    golden(&mut best, k, (a, b), steps, &mut eval);
+    best
+}
+
+/// `steps` golden-section evaluations over `[a, b]` (nothing when `b <= a` or `steps < 2`),
+/// each kept in `best` when it is lower (`k`: the grid index the bracket came from).
+fn golden<T>(
+    best: &mut Option<Best<f64, T>>,
+    k: usize,
+    (mut a, mut b): (f64, f64),
+    steps: usize,
+    eval: &mut impl FnMut(f64) -> Option<(T, f64)>,
+) {
+    if b <= a || steps < 2 {
+        return;
+    }
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut c, mut d) = (b - g * (b - a), a + g * (b - a));
+    let r = eval(c);
+    let mut fc = keep(best, k, c, r);
+    let r = eval(d);
+    let mut fd = keep(best, k, d, r);
+    for _ in 2..steps {
+        if fc <= fd {
+            b = d;
+            (d, fd) = (c, fc);
+            c = b - g * (b - a);
+            let r = eval(c);
+            fc = keep(best, k, c, r);
+        } else {
+            a = c;
+            (c, fc) = (d, fd);
+            d = a + g * (b - a);
+            let r = eval(d);
+            fd = keep(best, k, d, r);
         }
     }
+}
+
+/// An integer best point ([`integer`]) refined to a fraction: `steps` golden-section
+/// evaluations between its neighbours `at - 1` and `at + 1`, clamped to `[lo, hi]` (the whole
+/// point is kept when nothing between beats it; `None` never, an `Option` as [`integer`]). A delay's error varies continuously with
+/// the fraction ([`super::estimate::delayed`]); with `steps` = 8 the bracket shrinks to
+/// `2 * 0.618^6`, about a tenth of a sample.
+pub fn fractional<T>(
+    whole: Best<usize, T>,
+    (lo, hi): (f64, f64),
+    steps: usize,
+    mut eval: impl FnMut(f64) -> Option<(T, f64)>,
+) -> Option<Best<f64, T>> {
+    let at = whole.at as f64;
+    let k = whole.k;
+    let mut best = Some(Best {
+        k,
+        at,
+        value: whole.value,
+        err: whole.err,
+    });
+    let bracket = ((at - 1.0).max(lo), (at + 1.0).min(hi));
+    golden(&mut best, k, bracket, steps, &mut eval);
     best
 }
 
@@ -205,5 +258,32 @@ mod tests {
         assert!(!b.at_edge(&grid, false));
         let b = integer(&grid, |d| Some(((), -(d as f64)))).unwrap();
         assert!(b.at_edge(&grid, false));
+    }
+
+    #[test]
+    fn a_whole_best_point_is_refined_to_the_fraction_between_its_neighbours() {
+        let grid = [1, 2, 3, 4, 6, 8];
+        let err = |d: f64| (d - 4.37).abs();
+        let whole = integer(&grid, |d| Some(((), err(d as f64)))).unwrap();
+        assert_eq!(whole.at, 4);
+        let b = fractional(whole, (0.0, 8.0), 8, |d| Some(((), err(d)))).unwrap();
+        assert!((b.at - 4.37).abs() < 0.1, "{}", b.at);
+        // nothing between beats a whole point: it stays
+        let whole = integer(&grid, |d| Some(((), (d as f64 - 3.0).abs()))).unwrap();
+        let b = fractional(whole, (0.0, 8.0), 8, |d| Some(((), (d - 3.0).abs()))).unwrap();
+        assert_eq!(b.at, 3.0);
+    }
+
+    #[test]
+    fn a_geometric_grid_spans_its_range_with_neighbours_within_the_ratio() {
+        let g = geometric(0.01, 0.8, 1.2);
+        assert_eq!(g.len(), 26);
+        assert_eq!((g[0], g[25]), (0.01, 0.8));
+        assert!(g
+            .windows(2)
+            .all(|w| w[1] > w[0] && w[1] / w[0] <= 1.2 + 1e-12));
+        assert_eq!(geometric(0.5, 0.5, 1.2), vec![0.5]);
+        assert!(geometric(0.0, 1.0, 1.2).is_empty());
+        assert!(geometric(1.0, 2.0, 1.0).is_empty());
     }
 }

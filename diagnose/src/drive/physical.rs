@@ -56,10 +56,10 @@ pub(super) fn physical(
         }
         Cause::ForceOffset => (p.offset.is_finite(), None),
         Cause::InputDeadzone => (est.structure.deadband > before.structure.deadband, None),
-        Cause::InputDelay if est.structure.delay <= timing => (
+        Cause::InputDelay if est.structure.delay <= timing as f64 => (
             false,
             Some(format!(
-                "input_delay: {} sample(s) is within the log's own timing uncertainty ({timing}: the zero-order hold's sample, and the rows between fresh positions): the recorded input and position cannot place a delay that short",
+                "input_delay: {:.2} sample(s) is within the log's own timing uncertainty ({timing}: the zero-order hold's sample, and the rows between fresh positions): the recorded input and position cannot place a delay that short",
                 est.structure.delay
             )),
         ),

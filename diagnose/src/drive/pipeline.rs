@@ -67,7 +67,7 @@ pub fn diagnose_drive(
         asymmetric: !info.symmetric,
         offset: false,
         deadband: 0.0,
-        delay: 0,
+        delay: 0.0,
         saturation: 0.0,
         load: 0.0,
         bump: None,

@@ -201,7 +201,7 @@ mod tests {
                 asymmetric: true,
                 offset: false,
                 deadband: 0.0,
-                delay: 0,
+                delay: 0.0,
                 saturation: 0.0,
                 load: 0.0,
                 bump: None,

@@ -213,8 +213,8 @@ pub(super) fn cause_parameters(
             m.insert("deadband_effort".into(), est.structure.deadband);
         }
         Cause::InputDelay => {
-            m.insert("delay_s".into(), est.structure.delay as f64 * dt);
-            m.insert("delay_samples".into(), est.structure.delay as f64);
+            m.insert("delay_s".into(), est.structure.delay * dt);
+            m.insert("delay_samples".into(), est.structure.delay);
         }
         Cause::InputSaturation => {
             m.insert("saturation".into(), est.structure.saturation);
@@ -264,7 +264,7 @@ fn final_model(est: &Estimate, info: &DriveInfo, flags: &[String], dt: f64) -> F
         offset: p.offset,
         deadband: est.structure.deadband,
         delay_samples: est.structure.delay,
-        delay_s: est.structure.delay as f64 * dt,
+        delay_s: est.structure.delay * dt,
         load_friction: p.load_friction,
         stribeck_velocity: p.stribeck_velocity,
         bump: match p.local_friction {

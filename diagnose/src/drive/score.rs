@@ -19,12 +19,11 @@ pub struct Scored {
     pub selection: f64,
 }
 
-/// The recorded input as the structure applies it: shifted by the delay in whole samples
-/// (the first value held before the record starts) and saturated
-/// ([`super::estimate::saturate`]). The dead band is applied by the model.
+/// The recorded input as the structure applies it: delayed ([`super::estimate::delayed`])
+/// and saturated ([`super::estimate::saturate`]). The dead band is applied by the model.
 pub fn delayed_input(u: &[f64], s: &Structure) -> Vec<f64> {
     (0..u.len())
-        .map(|i| super::estimate::saturate(u[i.saturating_sub(s.delay)], s))
+        .map(|i| super::estimate::saturate(super::estimate::delayed(u, i, s.delay), s))
         .collect()
 }
 

@@ -497,7 +497,7 @@ fn saturation_note(ctx: &Context<'_>, est: &Estimate) -> String {
         for i in 0..p.run.x.len() {
             if p.v[i].abs() > ctx.ex.th.v_move {
                 n += 1;
-                let u = p.run.u[i.saturating_sub(est.structure.delay)];
+                let u = super::estimate::delayed(&p.run.u, i, est.structure.delay);
                 clipped += usize::from(u.abs() > sat);
             }
         }
