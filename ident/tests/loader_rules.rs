@@ -972,6 +972,23 @@ fn a_missing_run_file_or_a_directory_is_named_at_its_file_key_with_the_path() {
 }
 
 #[test]
+fn an_unlisted_csv_that_is_a_directory_says_why_it_was_read() {
+    // no [[runs]]: every *.csv is a run, and a folder named `sub.csv` has no `file` line to
+    // be named at; the error names its path and why it was taken as a run
+    let d = set("", &axis_csv(10, 0.01));
+    std::fs::create_dir(d.join("sub.csv")).unwrap();
+    let e = load_dataset(&d).expect_err("a directory");
+    let m = e.to_string();
+    assert_eq!(e.location.file, d.join("sub.csv"), "{m}");
+    assert!(matches!(e.problem, Problem::Io(_)), "{m}");
+    assert!(
+        m.contains("a directory") && m.contains("lists no [[runs]]"),
+        "{m}"
+    );
+    std::fs::remove_dir_all(d).unwrap();
+}
+
+#[test]
 fn time_in_another_unit_than_declared_is_refused_naming_time_unit() {
     // 1 kHz stamps in milliseconds read as seconds: 1 Hz
     let ms: String = axis_csv(200, 0.001)
