@@ -301,6 +301,36 @@ fn long_fields_are_clipped_in_messages() {
 }
 
 #[test]
+fn long_user_text_in_dataset_toml_checks_is_clipped() {
+    // a [columns] key that is no canonical name, and a run file listed twice: both echo the
+    // user's text, clipped like every other message (10,000 characters in, a few hundred out)
+    let long = "p".repeat(10_000);
+    let (d, e) = fails(&format!("[columns]\n{long} = \"x\"\n"), &axis_csv(10, 0.01));
+    let m = e.to_string();
+    assert!(m.len() < 600, "{} chars: {}", m.len(), &m[..600]);
+    assert!(
+        m.contains("10000 characters") && m.contains("canonical"),
+        "{m}"
+    );
+    assert_eq!(e.location.line, Some(2), "{m}");
+    std::fs::remove_dir_all(d).unwrap();
+    let (d, e) = fails(
+        &format!(
+            "[[runs]]\nfile = \"{long}\"\n[[runs]]\nfile = \"{long}\"\nkind = \"validation\"\n"
+        ),
+        &axis_csv(10, 0.01),
+    );
+    let m = e.to_string();
+    assert!(m.len() < 400, "{} chars: {}", m.len(), &m[..400]);
+    assert!(
+        m.contains("10000 characters") && m.contains("listed twice"),
+        "{m}"
+    );
+    assert_eq!(e.location.line, Some(4), "{m}");
+    std::fs::remove_dir_all(d).unwrap();
+}
+
+#[test]
 fn gain_times_input_cannot_overflow() {
     // issue 11: `gain * u` overflowing to infinity was accepted; the gain's and the input's
     // ranges now bound the product (1e9 * 1e9 counts), and a gain beyond is refused
@@ -939,6 +969,23 @@ fn a_missing_run_file_or_a_directory_is_named_at_its_file_key_with_the_path() {
             std::fs::remove_dir_all(d).unwrap();
         }
     }
+}
+
+#[test]
+fn an_unlisted_csv_that_is_a_directory_says_why_it_was_read() {
+    // no [[runs]]: every *.csv is a run, and a folder named `sub.csv` has no `file` line to
+    // be named at; the error names its path and why it was taken as a run
+    let d = set("", &axis_csv(10, 0.01));
+    std::fs::create_dir(d.join("sub.csv")).unwrap();
+    let e = load_dataset(&d).expect_err("a directory");
+    let m = e.to_string();
+    assert_eq!(e.location.file, d.join("sub.csv"), "{m}");
+    assert!(matches!(e.problem, Problem::Io(_)), "{m}");
+    assert!(
+        m.contains("a directory") && m.contains("lists no [[runs]]"),
+        "{m}"
+    );
+    std::fs::remove_dir_all(d).unwrap();
 }
 
 #[test]

@@ -206,7 +206,10 @@ pub fn jacobians(crane: &Crane, law: FrictionLaw, u: [f64; 3], eps: f64) -> Fall
 /// slope `Dbar + gamma Cbar(q)` [N s/m], valid while `|gamma qd|` stays well below 1. Where an
 /// axis' `+` and `-` coefficients differ, that slope has a kink at `qd = 0` and `A` holds the
 /// mean of the two one-sided slopes. `eps * gamma` must be at most 0.01 (`InputError`).
-/// `stiction` has no effect under this law (as in `Crane`).
+/// `stiction` has no effect under this law (as in `Crane`). `A`'s fastest eigenvalue (real,
+/// about `-(Dbar + gamma Cbar) / M` of the rope) bounds `Crane`'s fixed step under this law:
+/// RK4 is stable for `h < 2.785 / |lambda|` (default parameters: 5.59 ms at `gamma=1000`,
+/// 0.599 ms at 1e4).
 #[pyfunction]
 #[pyo3(signature = (params, state, u, *, law = "hybrid", gamma = 1000.0, stiction = None, eps = 1e-6))]
 #[allow(clippy::too_many_arguments)]

@@ -56,6 +56,10 @@ pub fn inputs_2d(py: Python<'_>, u: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
 /// A simulator of the crane: hybrid (exact-sticking) or `tanh` friction, fixed step.
 ///
 /// `Crane(params=None, h=1e-3, law="hybrid", state=None, *, gamma=1000.0, stiction=None)`.
+/// With `law="tanh"`, a large `gamma` [s/m] is stiff at rest: the fixed-step RK4 is stable
+/// only for `h` below about `2.785 M / (Dbar + gamma Cbar)` of the stiffest axis (default
+/// parameters: 5.59 ms at `gamma=1000`, 0.599 ms at 1e4, 0.060 ms at 1e5); above it the crane
+/// at rest creeps without an error (see `model/NUMERICS.md`).
 /// State vectors are `[x, y, L, alpha, beta, xd, yd, Ld, alphad, betad]` [m, rad, m/s,
 /// rad/s]; inputs `[u_x, u_y, u_l]` [V], saturated to +-12 V.
 ///

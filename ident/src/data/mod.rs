@@ -645,7 +645,9 @@ pub fn load_run(dir: &Path, ds: &DatasetSpec, spec: &RunSpec) -> Result<Run, Dat
 /// file-name order, kind `other`, when it lists none). The first bad file stops the load with
 /// an error naming file, line and column; a listed run's file that is missing or is not a
 /// regular file (a directory, a FIFO) is named at the line of its `file` key in
-/// `dataset.toml`, with the path looked for, before any run is read.
+/// `dataset.toml`, with the path looked for, before any run is read; an unlisted `*.csv`
+/// that is not a regular file is named by its path, saying it was taken as a run because no
+/// `[[runs]]` are listed.
 pub fn load_dataset(dir: &Path) -> Result<Dataset, DataError> {
     let spec_path = dir.join(DATASET_FILE);
     let text = crate::input::read_text(&spec_path).map_err(|e| {
@@ -685,6 +687,18 @@ pub fn load_dataset(dir: &Path) -> Result<Dataset, DataError> {
             .filter(|n| n.ends_with(".csv"))
             .collect();
         files.sort();
+        // a `*.csv` that is no regular file (a directory named `x.csv`, a FIFO): refused as
+        // a listed one is, saying why it was taken as a run (no `[[runs]]` to point at)
+        for f in &files {
+            let path = dir.join(f);
+            if let Err(e) = crate::input::check_regular(&path) {
+                let why = format!(
+                    "{e}; it was taken as a run because `{DATASET_FILE}` lists no [[runs]] \
+                     (then every *.csv of the directory is one): list the runs, or rename it"
+                );
+                return Err(err(&path, None, None, Problem::Io(why)));
+            }
+        }
         spec.runs = files
             .into_iter()
             .map(|file| RunSpec {

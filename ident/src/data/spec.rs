@@ -1,6 +1,6 @@
 //! `dataset.toml`: the description of a data set, parsed and range-checked.
 
-use super::error::{clip_quoted, err, DataError, Problem};
+use super::error::{clip, clip_quoted, err, DataError, Problem};
 use super::units::{Gain, InputUnit, PositionUnit, TimeUnit};
 use crate::num::Num;
 use serde::{Deserialize, Serialize};
@@ -804,7 +804,8 @@ fn check_columns(file: &Path, text: &str, spec: &DatasetSpec) -> Result<(), Data
                 None,
                 Problem::BadValue(format!(
                     "[columns] key `{k}` is no canonical column name; the keys are the names the tool expects ({}) and the values the names in your files, e.g. `x = \"{k}\"`",
-                    CANONICAL_COLUMNS.join(", ")
+                    CANONICAL_COLUMNS.join(", "),
+                    k = clip(k)
                 )),
             ));
         }
@@ -851,7 +852,9 @@ fn check_runs_listed(file: &Path, text: &str, spec: &DatasetSpec) -> Result<(), 
                 None,
                 Problem::BadValue(format!(
                     "run `{}` is listed twice (kinds `{:?}` and `{:?}`): a run is either fitted or held out, and a held-out score on a fitting run is no held-out score",
-                    a.file, b.kind, a.kind
+                    clip(&a.file),
+                    b.kind,
+                    a.kind
                 )),
             ));
         }
