@@ -236,14 +236,26 @@ const LEVEL_SLOW: f32 = 1.0 / 256.0;
 /// rough spot of up to `local_bins` would move it).
 pub const MOVE_BINS: usize = 9;
 
-/// Median of `v` (reordered), 0 for an empty slice.
-fn median(v: &mut [f32]) -> f32 {
-    let n = v.len();
-    if n == 0 {
-        return 0.0;
+/// Median of the `f32` values whose [`map::total_key`]s are `keys[..n]` (reordered), 0 if
+/// `n` is 0: the element at `n / 2` in [`f32::total_cmp`]'s order. Any selection gives that
+/// element, bit for bit, as `select_nth_unstable_by(n / 2, f32::total_cmp)` on the `f32`s
+/// did (the keys have the same order); on the integer keys a comparison is one instruction.
+fn median_of_keys(keys: &mut [i32; BINS], n: usize) -> f32 {
+    match select_key(keys, n, n / 2) {
+        Some(m) => map::from_total_key(m),
+        None => 0.0,
     }
-    let (_, m, _) = v.select_nth_unstable_by(n / 2, f32::total_cmp);
-    *m
+}
+
+/// The `k`-th smallest of `a[..n]` (0-based; `a[..n]` is reordered), `None` unless
+/// `k < n <= BINS`: `select_nth_unstable` (introselect, linear in the worst case), kept out
+/// of line (inlined into [`Monitor::move_done`] it measured twice the instructions).
+#[inline(never)]
+fn select_key(a: &mut [i32; BINS], n: usize, k: usize) -> Option<i32> {
+    if k >= n {
+        return None;
+    }
+    Some(*a.get_mut(..n)?.select_nth_unstable(k).1)
 }
 
 /// The slow level of one axis' residual mean square.
@@ -261,7 +273,7 @@ struct ResidualWatch {
 /// Weight per period of the residual level: one second at 2 ms.
 const RESIDUAL_WEIGHT: f32 = 1.0 / 500.0;
 /// Periods between two checks of the residual level (half its memory).
-const RESIDUAL_EVERY: u64 = 250;
+const RESIDUAL_EVERY: u16 = 250;
 /// Periods over which the residual level's mean and scatter are learned (after it forgot its
 /// start) before commissioning may end: ten of its memories.
 pub const RESIDUAL_LEARN: u32 = (10.0 / RESIDUAL_WEIGHT) as u32;
@@ -283,6 +295,9 @@ pub struct Monitor {
     last_dir: [Option<usize>; N],
     pending: [Option<Alarm>; 4],
     period: u64,
+    /// `period % RESIDUAL_EVERY`, counted along with `period` (and frozen with it if it ever
+    /// saturates): a 64-bit remainder is a library call on the Cortex-M4, this a compare.
+    residual_phase: u16,
     /// Commissioning is over (latched: it ends once).
     commissioned: bool,
 }
@@ -345,6 +360,7 @@ impl Monitor {
             last_dir: [None; N],
             pending: [None; 4],
             period: 0,
+            residual_phase: 0,
             commissioned: false,
         }
     }
@@ -451,12 +467,18 @@ impl Monitor {
         }
         let slot = (self.period % (2 * N as u64)) as usize;
         self.evaluate(slot / 2, slot % 2, learning);
-        if !learning && self.period % RESIDUAL_EVERY == 0 {
+        if !learning && self.residual_phase == 0 {
             for i in 0..N {
                 self.evaluate_residual(i);
             }
         }
-        self.period = self.period.saturating_add(1);
+        if let Some(next) = self.period.checked_add(1) {
+            self.period = next;
+            self.residual_phase += 1;
+            if self.residual_phase == RESIDUAL_EVERY {
+                self.residual_phase = 0;
+            }
+        }
         self.pop()
     }
 
@@ -472,16 +494,23 @@ impl Monitor {
     ) {
         let state = obs.state();
         let ax = &obs.twin().coeffs().axes[i];
-        let x = state.q[i].to_f64() as f32;
-        let v = state.qd[i].to_f64() as f32;
-        let d = obs.disturbance()[i].to_f64() as f32;
-        let force = (ax.gain * applied).to_f64() as f32 + pull;
+        let x = state.q[i].to_f32();
+        let v = state.qd[i].to_f32();
+        let d = obs.disturbance()[i].to_f32();
+        let force = (ax.gain * applied).to_f32() + pull;
         let dir = match obs.modes()[i] {
             Mode::Positive => Some(1usize),
             Mode::Negative => Some(0usize),
             Mode::Stopped => None,
         };
-        let reading = x + self.settings.reading_gain * obs.innovation()[i].to_f64() as f32;
+        // The encoder's reading [m] (the estimate plus the observer's innovation times
+        // `1 - alpha`) is used only by a watch that rests ([`BreakawayWatch::period`] reads
+        // it then and only then): computed only for such an axis, `x` otherwise.
+        let reading = if self.breakaway[i].resting() {
+            x + self.settings.reading_gain * obs.innovation()[i].to_f32()
+        } else {
+            x
+        };
         let sense = Sense {
             stopped: dir.is_none(),
             x,
@@ -494,7 +523,7 @@ impl Monitor {
             min_stop: self.settings.min_stop,
         };
         if let Some(b) = self.breakaway[i].period(sense, limits) {
-            let model = dry_at(ax, mode_of(b.dir), state.q[i]).to_f64() as f32;
+            let model = dry_at(ax, mode_of(b.dir), state.q[i]).to_f32();
             let force = b.estimate(self.mass[i], self.settings.quantum[i], self.settings.period);
             self.restart(i, b.dir, x, force, model, learning);
         }
@@ -520,7 +549,7 @@ impl Monitor {
                 }
             }
         }
-        let m = obs.residual_mean_square()[i].to_f64() as f32;
+        let m = obs.residual_mean_square()[i].to_f32();
         if m.is_finite() {
             self.residual_sample(i, m, learning);
         }
@@ -540,8 +569,8 @@ impl Monitor {
             Ok(o) if l > R::ZERO => {
                 let t = o.tension / l;
                 [
-                    (t * (o.payload[0] - q[0])).to_f64() as f32,
-                    (t * (o.payload[1] - q[1])).to_f64() as f32,
+                    (t * (o.payload[0] - q[0])).to_f32(),
+                    (t * (o.payload[1] - q[1])).to_f32(),
                 ]
             }
             _ => [0.0; N],
@@ -618,7 +647,11 @@ impl Monitor {
         }
     }
 
+    /// The oldest pending alarm. The pending alarms are a prefix of `pending` ([`Monitor::push`]
+    /// fills the first free slot, this takes the first and shifts the rest down), so an empty
+    /// first slot means none is pending: then nothing is moved (the common case, every period).
     fn pop(&mut self) -> Option<Alarm> {
+        self.pending[0]?;
         let first = self.pending[0].take();
         self.pending.rotate_left(1);
         first
@@ -668,28 +701,16 @@ impl Monitor {
         let Some((lo, hi)) = c.span.take() else {
             return;
         };
-        let mut devs = [0.0f32; BINS];
-        let mut crossed = 0usize;
-        let mut sum = 0.0f32;
-        let mut judged = 0usize;
-        for b in 0..BINS {
-            let v = map.view(b, &s);
-            if v.judged {
-                sum += v.band;
-                judged += 1;
-                if b >= usize::from(lo) && b <= usize::from(hi) {
-                    devs[crossed] = v.deviation;
-                    crossed += 1;
-                }
-            }
-        }
+        let mut keys = [0i32; BINS];
+        let (sum, judged, crossed) =
+            map.judged_bands(&s, usize::from(lo), usize::from(hi), &mut keys);
         if judged > 0 {
             c.pooled = sum / judged as f32;
         }
         if crossed < MOVE_BINS {
             return;
         }
-        let level = median(&mut devs[..crossed]);
+        let level = median_of_keys(&mut keys, crossed);
         c.level = level;
         let standing = c.drift.standing() || c.local.standing();
         let learned = c.level_n >= self.settings.level_learn;
@@ -846,6 +867,11 @@ struct Local {
 
 /// The stretch of bins out of band (beyond the travel's level `level`) around the worst
 /// one, if it is at most `max_bins` wide and at most `max_bins` other bins are out of band.
+///
+/// One pass over the map decides which bins are out of band
+/// ([`SlidingMap::out_of_band`]); the stretch and its change then read only the bins it
+/// marked (the change of a marked bin recomputed as `deviation - level`, the same value), so
+/// no bin's band test is done twice.
 fn local_pattern(
     map: &SlidingMap,
     s: &MapSettings,
@@ -854,30 +880,18 @@ fn local_pattern(
     k2: f32,
     max_bins: usize,
 ) -> Option<Local> {
-    let out = |b: usize| -> Option<f32> {
-        let v = map.view(b, s);
-        let band = if v.band > pooled { v.band } else { pooled };
-        let e = v.deviation - level;
-        if v.judged && v.age <= FRESH_MOVES && e * e > k2 * band {
-            Some(e)
-        } else {
-            None
+    let scan = map.out_of_band(s, FRESH_MOVES, level, pooled, k2);
+    let (peak, peak_e) = scan.peak?;
+    let count = scan.count;
+    let sign = if peak_e < 0.0 { -1.0 } else { 1.0 };
+    // A bin out of band on the peak's side: its change beyond the level [N].
+    let same = |b: usize| -> Option<f32> {
+        if scan.mask.checked_shr(b as u32).unwrap_or(0) & 1 == 0 {
+            return None;
         }
+        let e = map.deviation(b) - level;
+        (e * sign > 0.0).then_some(e)
     };
-    let mut worst: Option<(usize, f32)> = None;
-    let mut count = 0usize;
-    for b in 0..BINS {
-        if let Some(e) = out(b) {
-            count += 1;
-            let a = if e < 0.0 { -e } else { e };
-            if worst.map_or(true, |(_, w)| a > w) {
-                worst = Some((b, a));
-            }
-        }
-    }
-    let (peak, _) = worst?;
-    let sign = out(peak).map_or(0.0, |e| if e < 0.0 { -1.0 } else { 1.0 });
-    let same = |b: usize| out(b).filter(|e| e * sign > 0.0);
     let mut lo = peak;
     while lo > 0 && same(lo - 1).is_some() {
         lo -= 1;
@@ -912,7 +926,6 @@ fn local_pattern(
     };
     let left = side(&mut (lo.saturating_sub(4)..lo.saturating_sub(1)));
     let right = side(&mut ((hi + 2).min(BINS)..(hi + 5).min(BINS)));
-    let peak_e = out(peak)?;
     let closer = match (left, right) {
         (Some(a), Some(b)) => {
             if (peak_e - a) * sign < (peak_e - b) * sign {
@@ -951,4 +964,78 @@ fn local_pattern(
         width: len as f32 * map.bin_width(),
         change,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The old median: `select_nth_unstable_by(n / 2, f32::total_cmp)` on the `f32`s.
+    fn median_by_total_cmp(v: &mut [f32]) -> f32 {
+        let n = v.len();
+        if n == 0 {
+            return 0.0;
+        }
+        *v.select_nth_unstable_by(n / 2, f32::total_cmp).1
+    }
+
+    #[test]
+    fn the_median_of_the_keys_is_the_total_cmp_median_bit_for_bit() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let specials = [0.0f32, -0.0, 1.0, -1.0, f32::MIN_POSITIVE, -f32::MAX, 1e-3];
+        for round in 0..4000 {
+            let n = (next() % (BINS as u64 + 1)) as usize;
+            let mut v = [0.0f32; BINS];
+            for x in v.iter_mut().take(n) {
+                let r = next();
+                *x = match round % 4 {
+                    // few distinct values: many ties
+                    0 => specials[(r % specials.len() as u64) as usize],
+                    // sorted runs and reversed runs
+                    1 => (r % 16) as f32 * 0.125 - 1.0,
+                    _ => (r as i64 as f64 / 1e18) as f32,
+                };
+            }
+            if round % 8 == 1 {
+                v[..n].sort_by(f32::total_cmp);
+            } else if round % 8 == 3 {
+                v[..n].sort_by(|a, b| b.total_cmp(a));
+            }
+            let mut keys = [0i32; BINS];
+            for (k, x) in keys.iter_mut().zip(&v[..n]) {
+                *k = map::total_key(*x);
+            }
+            let got = median_of_keys(&mut keys, n);
+            let want = median_by_total_cmp(&mut v[..n]);
+            assert_eq!(got.to_bits(), want.to_bits(), "round {round}, n {n}");
+            // Every rank, against a sort.
+            if n > 0 && round % 16 == 0 {
+                let mut sorted = v;
+                sorted[..n].sort_by(f32::total_cmp);
+                for (rank, want) in sorted.iter().enumerate().take(n) {
+                    let mut keys = [0i32; BINS];
+                    for (k, x) in keys.iter_mut().zip(&v[..n]) {
+                        *k = map::total_key(*x);
+                    }
+                    let got = select_key(&mut keys, n, rank).map(map::from_total_key);
+                    assert_eq!(got.map(f32::to_bits), Some(want.to_bits()));
+                }
+            }
+        }
+        let mut keys = [0i32; BINS];
+        assert_eq!(select_key(&mut keys, 3, 3), None);
+        assert_eq!(select_key(&mut keys, BINS + 1, 0), None);
+        for x in [0.0f32, -0.0, 1.5, -2.25, f32::INFINITY, f32::NEG_INFINITY] {
+            assert_eq!(
+                map::from_total_key(map::total_key(x)).to_bits(),
+                x.to_bits()
+            );
+        }
+    }
 }
