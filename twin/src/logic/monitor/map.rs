@@ -73,6 +73,19 @@ pub struct OutOfBand {
     pub peak: Option<(usize, f32)>,
 }
 
+/// What [`SlidingMap::judged_bands`] found.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct JudgedBands {
+    /// Sum of the judged bins' bands [N^2], in bin order.
+    pub sum: f32,
+    /// Judged bins.
+    pub judged: usize,
+    /// Judged bins in the range whose deviation's key is below the pivot: `keys[..below]`.
+    pub below: usize,
+    /// The other judged bins in the range: `keys[BINS - above..]`.
+    pub above: usize,
+}
+
 /// The key of `x` whose `i32` order is [`f32::total_cmp`]'s order (the sign-magnitude bits
 /// turned into two's complement, as `total_cmp` compares them); [`from_total_key`] inverts it.
 pub fn total_key(x: f32) -> i32 {
@@ -268,21 +281,24 @@ impl SlidingMap {
 
     /// One pass over the judged bins ([`BinView::judged`]), in bin order: the sum of their
     /// bands [N^2] (added in bin order, the same bits as a loop over [`SlidingMap::view`]),
-    /// their number, and the deviations [N] of those in `lo..=hi` written to the front of
-    /// `keys` as [`total_key`]s (in bin order), whose number is the third value.
+    /// their number, and the deviations [N] of those in `lo..=hi` as [`total_key`]s in
+    /// `keys`, split around `pivot` (a key): those below it at the front of `keys`, the
+    /// others at its back ([`JudgedBands`]).
     #[inline(never)]
     pub fn judged_bands(
         &self,
         s: &MapSettings,
         lo: usize,
         hi: usize,
+        pivot: i32,
         keys: &mut [i32; BINS],
-    ) -> (f32, usize, usize) {
+    ) -> JudgedBands {
         let hi = hi.min(BINS - 1);
         let lo = lo.min(hi + 1);
         let mut sum = 0.0f32;
         let mut judged = 0usize;
-        let mut crossed = 0usize;
+        let mut below = 0usize;
+        let mut above = 0usize;
         // Three stretches, in bin order: before `lo`, `lo..=hi`, after `hi`.
         for b in 0..lo {
             if self.n[b] >= s.judged {
@@ -294,8 +310,14 @@ impl SlidingMap {
             if self.n[b] >= s.judged {
                 sum += self.band[b];
                 judged += 1;
-                keys[crossed & (BINS - 1)] = total_key(self.cur[b] - self.reference[b]);
-                crossed += 1;
+                let key = total_key(self.cur[b] - self.reference[b]);
+                if key < pivot {
+                    keys[below & (BINS - 1)] = key;
+                    below += 1;
+                } else {
+                    above += 1;
+                    keys[(BINS - above) & (BINS - 1)] = key;
+                }
             }
         }
         for b in hi + 1..BINS {
@@ -304,7 +326,12 @@ impl SlidingMap {
                 judged += 1;
             }
         }
-        (sum, judged, crossed)
+        JudgedBands {
+            sum,
+            judged,
+            below,
+            above,
+        }
     }
 
     /// One pass over the map: the bins judged ([`BinView::judged`]), at most `fresh` moves old

@@ -236,26 +236,34 @@ const LEVEL_SLOW: f32 = 1.0 / 256.0;
 /// rough spot of up to `local_bins` would move it).
 pub const MOVE_BINS: usize = 9;
 
-/// Median of the `f32` values whose [`map::total_key`]s are `keys[..n]` (reordered), 0 if
-/// `n` is 0: the element at `n / 2` in [`f32::total_cmp`]'s order. Any selection gives that
-/// element, bit for bit, as `select_nth_unstable_by(n / 2, f32::total_cmp)` on the `f32`s
-/// did (the keys have the same order); on the integer keys a comparison is one instruction.
-fn median_of_keys(keys: &mut [i32; BINS], n: usize) -> f32 {
-    match select_key(keys, n, n / 2) {
-        Some(m) => map::from_total_key(m),
-        None => 0.0,
-    }
+/// Median of the `f32` values whose [`map::total_key`]s are `keys[..below]` and
+/// `keys[BINS - above..]` (reordered), 0 if there are none: the element at
+/// `(below + above) / 2` in [`f32::total_cmp`]'s order. Every key of the first part is
+/// below every key of the second ([`SlidingMap::judged_bands`] split them around a pivot), so
+/// the element is selected in the one part that holds it: about half the keys when the
+/// pivot is near the median (the travel's previous level). Any selection gives that element,
+/// bit for bit, as `select_nth_unstable_by(n / 2, f32::total_cmp)` on the `f32`s did (the
+/// keys have the same order); on the integer keys a comparison is one instruction.
+fn median_of_split_keys(keys: &mut [i32; BINS], below: usize, above: usize) -> f32 {
+    let k = (below + above) / 2;
+    let m = if k < below {
+        keys.get_mut(..below).and_then(|a| select_key(a, k))
+    } else {
+        let from = BINS.saturating_sub(above);
+        keys.get_mut(from..).and_then(|a| select_key(a, k - below))
+    };
+    m.map_or(0.0, map::from_total_key)
 }
 
-/// The `k`-th smallest of `a[..n]` (0-based; `a[..n]` is reordered), `None` unless
-/// `k < n <= BINS`: `select_nth_unstable` (introselect, linear in the worst case), kept out
-/// of line (inlined into [`Monitor::move_done`] it measured twice the instructions).
+/// The `k`-th smallest of `a` (0-based; `a` is reordered), `None` unless `k < a.len()`:
+/// `select_nth_unstable` (introselect, linear in the worst case), kept out of line (inlined
+/// into [`Monitor::move_done`] it measured twice the instructions).
 #[inline(never)]
-fn select_key(a: &mut [i32; BINS], n: usize, k: usize) -> Option<i32> {
-    if k >= n {
+fn select_key(a: &mut [i32], k: usize) -> Option<i32> {
+    if k >= a.len() {
         return None;
     }
-    Some(*a.get_mut(..n)?.select_nth_unstable(k).1)
+    Some(*a.select_nth_unstable(k).1)
 }
 
 /// The slow level of one axis' residual mean square.
@@ -701,16 +709,18 @@ impl Monitor {
         let Some((lo, hi)) = c.span.take() else {
             return;
         };
+        // The crossed deviations are split around the previous level (a pivot near the new
+        // median: the selection then works on about half of them).
         let mut keys = [0i32; BINS];
-        let (sum, judged, crossed) =
-            map.judged_bands(&s, usize::from(lo), usize::from(hi), &mut keys);
-        if judged > 0 {
-            c.pooled = sum / judged as f32;
+        let pivot = map::total_key(c.level);
+        let found = map.judged_bands(&s, usize::from(lo), usize::from(hi), pivot, &mut keys);
+        if found.judged > 0 {
+            c.pooled = found.sum / found.judged as f32;
         }
-        if crossed < MOVE_BINS {
+        if found.below + found.above < MOVE_BINS {
             return;
         }
-        let level = median_of_keys(&mut keys, crossed);
+        let level = median_of_split_keys(&mut keys, found.below, found.above);
         c.level = level;
         let standing = c.drift.standing() || c.local.standing();
         let learned = c.level_n >= self.settings.level_learn;
@@ -1007,11 +1017,26 @@ mod tests {
             } else if round % 8 == 3 {
                 v[..n].sort_by(|a, b| b.total_cmp(a));
             }
+            // Split around a pivot as `SlidingMap::judged_bands` does: one of the values, or
+            // a value of its own.
+            let pivot = if n > 0 && round % 3 == 0 {
+                map::total_key(v[(next() % n as u64) as usize])
+            } else {
+                map::total_key((next() as i64 as f64 / 4e18) as f32)
+            };
             let mut keys = [0i32; BINS];
-            for (k, x) in keys.iter_mut().zip(&v[..n]) {
-                *k = map::total_key(*x);
+            let (mut below, mut above) = (0usize, 0usize);
+            for x in &v[..n] {
+                let key = map::total_key(*x);
+                if key < pivot {
+                    keys[below] = key;
+                    below += 1;
+                } else {
+                    above += 1;
+                    keys[BINS - above] = key;
+                }
             }
-            let got = median_of_keys(&mut keys, n);
+            let got = median_of_split_keys(&mut keys, below, above);
             let want = median_by_total_cmp(&mut v[..n]);
             assert_eq!(got.to_bits(), want.to_bits(), "round {round}, n {n}");
             // Every rank, against a sort.
@@ -1023,14 +1048,14 @@ mod tests {
                     for (k, x) in keys.iter_mut().zip(&v[..n]) {
                         *k = map::total_key(*x);
                     }
-                    let got = select_key(&mut keys, n, rank).map(map::from_total_key);
+                    let got = select_key(&mut keys[..n], rank).map(map::from_total_key);
                     assert_eq!(got.map(f32::to_bits), Some(want.to_bits()));
                 }
             }
         }
         let mut keys = [0i32; BINS];
-        assert_eq!(select_key(&mut keys, 3, 3), None);
-        assert_eq!(select_key(&mut keys, BINS + 1, 0), None);
+        assert_eq!(select_key(&mut keys[..3], 3), None);
+        assert_eq!(median_of_split_keys(&mut keys, 0, 0), 0.0);
         for x in [0.0f32, -0.0, 1.5, -2.25, f32::INFINITY, f32::NEG_INFINITY] {
             assert_eq!(
                 map::from_total_key(map::total_key(x)).to_bits(),
