@@ -19,7 +19,9 @@
 //! operated. Afterwards references and bands follow slow changes (a temperature drift over an
 //! hour) while no alarm of their map stands.
 //!
-//! Evaluation: one of the six maps (axis, direction) per period, round robin, O(64) work.
+//! Evaluation: one of the four maps (axis, direction) per period, round robin, O(64) work
+//! (one branch-free pass over the map marks the bins out of band, [`map::SlidingMap::out_of_band`];
+//! only those are read again).
 //! Every threshold is [`Settings::k`] standard deviations of a learned scatter, never a force
 //! constant: the monitor is as sensitive as the rig is quiet. Alarms
 //! ([`alarm::AlarmKind`]) are debounced ([`alarm::Debounce`]): a condition must hold in two
@@ -700,6 +702,13 @@ impl Monitor {
     /// [`MOVE_BINS`] judged bins give no level. The level's band is its variance over moves,
     /// learned over [`Settings::level_learn`] moves, then tracked slowly by the levels inside it while
     /// no alarm of the map stands. Also refreshes the pooled band (mean band of the judged bins).
+    ///
+    /// Cost (this and an evaluation in one period make the monitor's worst case): one pass
+    /// over the map's 64 bins ([`SlidingMap::judged_bands`]: the judged bands summed in bin
+    /// order, the crossed deviations keyed and split around the previous level) and one
+    /// selection among the part that holds the median ([`median_of_split_keys`]). The level,
+    /// the pooled band and every decision are the same, bit for bit, as from a loop over
+    /// [`SlidingMap::view`] and `select_nth_unstable_by(n / 2, f32::total_cmp)`.
     fn move_done(&mut self, i: usize, dj: usize, learning: bool) {
         let s = self.settings.map;
         let k2 = self.settings.k * self.settings.k;
