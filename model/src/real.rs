@@ -36,6 +36,13 @@ pub trait Real:
     fn from_f64(x: f64) -> Self;
     /// Widens this value to `f64` (exact).
     fn to_f64(self) -> f64;
+    /// This value rounded to `f32`: the same bits as `self.to_f64() as f32` (for `f32` the
+    /// value itself, without the round trip through `f64`, which a Cortex-M4F computes in
+    /// software).
+    #[inline]
+    fn to_f32(self) -> f32 {
+        self.to_f64() as f32
+    }
     /// Sine (radians), from `libm`.
     fn sin(self) -> Self;
     /// Cosine (radians), from `libm`.
@@ -110,6 +117,10 @@ impl Real for f32 {
     #[inline]
     fn to_f64(self) -> f64 {
         f64::from(self)
+    }
+    #[inline]
+    fn to_f32(self) -> f32 {
+        self
     }
     #[inline]
     fn sin(self) -> Self {

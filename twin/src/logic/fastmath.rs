@@ -108,6 +108,11 @@ impl Real for F32x {
     }
 
     #[inline]
+    fn to_f32(self) -> f32 {
+        self.0
+    }
+
+    #[inline]
     fn sin(self) -> Self {
         F32x(sincosf(self.0).0)
     }

@@ -60,6 +60,47 @@ impl Default for MapSettings {
     }
 }
 
+/// The bins of a map out of band against a travel level, from one pass over the map
+/// ([`SlidingMap::out_of_band`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct OutOfBand {
+    /// Bit `b` set: bin `b` is out of band.
+    pub mask: u64,
+    /// Bins out of band (the bits set in `mask`).
+    pub count: usize,
+    /// The bin furthest out of band (the lowest of equals) and its change beyond the level
+    /// [N] (signed, never 0), if any bin is out.
+    pub peak: Option<(usize, f32)>,
+}
+
+/// What [`SlidingMap::judged_bands`] found.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct JudgedBands {
+    /// Sum of the judged bins' bands [N^2], in bin order.
+    pub sum: f32,
+    /// Judged bins.
+    pub judged: usize,
+    /// Judged bins in the range whose deviation's key is below the pivot: `keys[..below]`.
+    pub below: usize,
+    /// The other judged bins in the range: `keys[BINS - above..]`.
+    pub above: usize,
+}
+
+/// The key of `x` whose `i32` order is [`f32::total_cmp`]'s order (the sign-magnitude bits
+/// turned into two's complement, as `total_cmp` compares them); [`from_total_key`] inverts it.
+pub fn total_key(x: f32) -> i32 {
+    let b = x.to_bits() as i32;
+    b ^ (((b >> 31) as u32) >> 1) as i32
+}
+
+/// The `f32` of a [`total_key`] (bit for bit).
+pub fn from_total_key(k: i32) -> f32 {
+    f32::from_bits((k ^ (((k >> 31) as u32) >> 1) as i32) as u32)
+}
+
+// `SlidingMap::out_of_band` takes the bins 32 at a time.
+const _: () = assert!(BINS % 32 == 0 && BINS.is_power_of_two());
+
 /// One direction's map over the travel `[lo, hi]` [m].
 #[derive(Clone, Debug, PartialEq)]
 pub struct SlidingMap {
@@ -231,6 +272,128 @@ impl SlidingMap {
             judged: self.n[b] >= s.judged,
             age: self.moves.wrapping_sub(self.seen[b]),
         }
+    }
+
+    /// Current level minus reference of bin `b` [N]: [`BinView::deviation`], alone.
+    pub fn deviation(&self, b: usize) -> f32 {
+        self.cur[b] - self.reference[b]
+    }
+
+    /// One pass over the judged bins ([`BinView::judged`]), in bin order: the sum of their
+    /// bands [N^2] (added in bin order, the same bits as a loop over [`SlidingMap::view`]),
+    /// their number, and the deviations [N] of those in `lo..=hi` as [`total_key`]s in
+    /// `keys`, split around `pivot` (a key): those below it at the front of `keys`, the
+    /// others at its back ([`JudgedBands`]).
+    #[inline(never)]
+    pub fn judged_bands(
+        &self,
+        s: &MapSettings,
+        lo: usize,
+        hi: usize,
+        pivot: i32,
+        keys: &mut [i32; BINS],
+    ) -> JudgedBands {
+        let hi = hi.min(BINS - 1);
+        let lo = lo.min(hi + 1);
+        let mut sum = 0.0f32;
+        let mut judged = 0usize;
+        let mut below = 0usize;
+        let mut above = 0usize;
+        // Three stretches, in bin order: before `lo`, `lo..=hi`, after `hi`.
+        for b in 0..lo {
+            if self.n[b] >= s.judged {
+                sum += self.band[b];
+                judged += 1;
+            }
+        }
+        for b in lo..hi + 1 {
+            if self.n[b] >= s.judged {
+                sum += self.band[b];
+                judged += 1;
+                let key = total_key(self.cur[b] - self.reference[b]);
+                if key < pivot {
+                    keys[below & (BINS - 1)] = key;
+                    below += 1;
+                } else {
+                    above += 1;
+                    keys[(BINS - above) & (BINS - 1)] = key;
+                }
+            }
+        }
+        for b in hi + 1..BINS {
+            if self.n[b] >= s.judged {
+                sum += self.band[b];
+                judged += 1;
+            }
+        }
+        JudgedBands {
+            sum,
+            judged,
+            below,
+            above,
+        }
+    }
+
+    /// One pass over the map: the bins judged ([`BinView::judged`]), at most `fresh` moves old
+    /// ([`BinView::age`]), whose change beyond the travel's level `e = deviation - level` [N]
+    /// is out of band, `e^2 > k2 max(band, pooled)` (`pooled` [N^2] the floor of every
+    /// bin's band, `k2` the squared threshold in standard deviations): that test on each
+    /// bin's [`SlidingMap::view`], bin by bin, the same decisions and values.
+    ///
+    /// Most bins are in band, and a bin is out only if `e^2 - k2 pooled > 0` (for `k2 > 0`:
+    /// `k2 b` does not decrease with `b`, rounding included; otherwise every bin is a
+    /// candidate): a first pass takes that difference's sign bit for every bin, without a
+    /// branch, and the full test runs on the candidates only, in bin order.
+    #[inline(never)]
+    pub fn out_of_band(
+        &self,
+        s: &MapSettings,
+        fresh: u16,
+        level: f32,
+        pooled: f32,
+        k2: f32,
+    ) -> OutOfBand {
+        let floor = if k2 > 0.0 {
+            k2 * pooled
+        } else {
+            f32::NEG_INFINITY
+        };
+        let mut out = OutOfBand::default();
+        // |e| of the peak so far: any out bin's |e| (>= 0) is above it at first.
+        let mut worst = -1.0f32;
+        for half in 0..BINS / 32 {
+            let first = 32 * half;
+            // Bit 31 - j: bin first + j is below the floor (the sign of e^2 - floor).
+            let mut below = 0u32;
+            for b in first..first + 32 {
+                let e = (self.cur[b] - self.reference[b]) - level;
+                below = (below << 1) | ((e * e - floor).to_bits() >> 31);
+            }
+            let mut candidates = !below;
+            while candidates != 0 {
+                let j = candidates.leading_zeros() as usize;
+                candidates &= !(0x8000_0000u32 >> j);
+                let b = (first + j) & (BINS - 1);
+                let e = (self.cur[b] - self.reference[b]) - level;
+                let band = if self.band[b] > pooled {
+                    self.band[b]
+                } else {
+                    pooled
+                };
+                let judged = self.n[b] >= s.judged;
+                let age = self.moves.wrapping_sub(self.seen[b]);
+                if judged && age <= fresh && e * e > k2 * band {
+                    out.mask |= 1u64.checked_shl(b as u32).unwrap_or(0);
+                    out.count += 1;
+                    let a = if e < 0.0 { -e } else { e };
+                    if a > worst {
+                        worst = a;
+                        out.peak = Some((b, e));
+                    }
+                }
+            }
+        }
+        out
     }
 
     /// Reference level of bin `b` [N] (residual friction commissioning saw there).

@@ -19,7 +19,9 @@
 //! operated. Afterwards references and bands follow slow changes (a temperature drift over an
 //! hour) while no alarm of their map stands.
 //!
-//! Evaluation: one of the six maps (axis, direction) per period, round robin, O(64) work.
+//! Evaluation: one of the four maps (axis, direction) per period, round robin, O(64) work
+//! (one branch-free pass over the map marks the bins out of band, [`map::SlidingMap::out_of_band`];
+//! only those are read again).
 //! Every threshold is [`Settings::k`] standard deviations of a learned scatter, never a force
 //! constant: the monitor is as sensitive as the rig is quiet. Alarms
 //! ([`alarm::AlarmKind`]) are debounced ([`alarm::Debounce`]): a condition must hold in two
@@ -236,14 +238,34 @@ const LEVEL_SLOW: f32 = 1.0 / 256.0;
 /// rough spot of up to `local_bins` would move it).
 pub const MOVE_BINS: usize = 9;
 
-/// Median of `v` (reordered), 0 for an empty slice.
-fn median(v: &mut [f32]) -> f32 {
-    let n = v.len();
-    if n == 0 {
-        return 0.0;
+/// Median of the `f32` values whose [`map::total_key`]s are `keys[..below]` and
+/// `keys[BINS - above..]` (reordered), 0 if there are none: the element at
+/// `(below + above) / 2` in [`f32::total_cmp`]'s order. Every key of the first part is
+/// below every key of the second ([`SlidingMap::judged_bands`] split them around a pivot), so
+/// the element is selected in the one part that holds it: about half the keys when the
+/// pivot is near the median (the travel's previous level). Any selection gives that element,
+/// bit for bit, as `select_nth_unstable_by(n / 2, f32::total_cmp)` on the `f32`s did (the
+/// keys have the same order); on the integer keys a comparison is one instruction.
+fn median_of_split_keys(keys: &mut [i32; BINS], below: usize, above: usize) -> f32 {
+    let k = (below + above) / 2;
+    let m = if k < below {
+        keys.get_mut(..below).and_then(|a| select_key(a, k))
+    } else {
+        let from = BINS.saturating_sub(above);
+        keys.get_mut(from..).and_then(|a| select_key(a, k - below))
+    };
+    m.map_or(0.0, map::from_total_key)
+}
+
+/// The `k`-th smallest of `a` (0-based; `a` is reordered), `None` unless `k < a.len()`:
+/// `select_nth_unstable` (introselect, linear in the worst case), kept out of line (inlined
+/// into [`Monitor::move_done`] it measured twice the instructions).
+#[inline(never)]
+fn select_key(a: &mut [i32], k: usize) -> Option<i32> {
+    if k >= a.len() {
+        return None;
     }
-    let (_, m, _) = v.select_nth_unstable_by(n / 2, f32::total_cmp);
-    *m
+    Some(*a.select_nth_unstable(k).1)
 }
 
 /// The slow level of one axis' residual mean square.
@@ -261,7 +283,7 @@ struct ResidualWatch {
 /// Weight per period of the residual level: one second at 2 ms.
 const RESIDUAL_WEIGHT: f32 = 1.0 / 500.0;
 /// Periods between two checks of the residual level (half its memory).
-const RESIDUAL_EVERY: u64 = 250;
+const RESIDUAL_EVERY: u16 = 250;
 /// Periods over which the residual level's mean and scatter are learned (after it forgot its
 /// start) before commissioning may end: ten of its memories.
 pub const RESIDUAL_LEARN: u32 = (10.0 / RESIDUAL_WEIGHT) as u32;
@@ -283,6 +305,9 @@ pub struct Monitor {
     last_dir: [Option<usize>; N],
     pending: [Option<Alarm>; 4],
     period: u64,
+    /// `period % RESIDUAL_EVERY`, counted along with `period` (and frozen with it if it ever
+    /// saturates): a 64-bit remainder is a library call on the Cortex-M4, this a compare.
+    residual_phase: u16,
     /// Commissioning is over (latched: it ends once).
     commissioned: bool,
 }
@@ -345,6 +370,7 @@ impl Monitor {
             last_dir: [None; N],
             pending: [None; 4],
             period: 0,
+            residual_phase: 0,
             commissioned: false,
         }
     }
@@ -451,12 +477,18 @@ impl Monitor {
         }
         let slot = (self.period % (2 * N as u64)) as usize;
         self.evaluate(slot / 2, slot % 2, learning);
-        if !learning && self.period % RESIDUAL_EVERY == 0 {
+        if !learning && self.residual_phase == 0 {
             for i in 0..N {
                 self.evaluate_residual(i);
             }
         }
-        self.period = self.period.saturating_add(1);
+        if let Some(next) = self.period.checked_add(1) {
+            self.period = next;
+            self.residual_phase += 1;
+            if self.residual_phase == RESIDUAL_EVERY {
+                self.residual_phase = 0;
+            }
+        }
         self.pop()
     }
 
@@ -472,16 +504,23 @@ impl Monitor {
     ) {
         let state = obs.state();
         let ax = &obs.twin().coeffs().axes[i];
-        let x = state.q[i].to_f64() as f32;
-        let v = state.qd[i].to_f64() as f32;
-        let d = obs.disturbance()[i].to_f64() as f32;
-        let force = (ax.gain * applied).to_f64() as f32 + pull;
+        let x = state.q[i].to_f32();
+        let v = state.qd[i].to_f32();
+        let d = obs.disturbance()[i].to_f32();
+        let force = (ax.gain * applied).to_f32() + pull;
         let dir = match obs.modes()[i] {
             Mode::Positive => Some(1usize),
             Mode::Negative => Some(0usize),
             Mode::Stopped => None,
         };
-        let reading = x + self.settings.reading_gain * obs.innovation()[i].to_f64() as f32;
+        // The encoder's reading [m] (the estimate plus the observer's innovation times
+        // `1 - alpha`) is used only by a watch that rests ([`BreakawayWatch::period`] reads
+        // it then and only then): computed only for such an axis, `x` otherwise.
+        let reading = if self.breakaway[i].resting() {
+            x + self.settings.reading_gain * obs.innovation()[i].to_f32()
+        } else {
+            x
+        };
         let sense = Sense {
             stopped: dir.is_none(),
             x,
@@ -494,7 +533,7 @@ impl Monitor {
             min_stop: self.settings.min_stop,
         };
         if let Some(b) = self.breakaway[i].period(sense, limits) {
-            let model = dry_at(ax, mode_of(b.dir), state.q[i]).to_f64() as f32;
+            let model = dry_at(ax, mode_of(b.dir), state.q[i]).to_f32();
             let force = b.estimate(self.mass[i], self.settings.quantum[i], self.settings.period);
             self.restart(i, b.dir, x, force, model, learning);
         }
@@ -520,7 +559,7 @@ impl Monitor {
                 }
             }
         }
-        let m = obs.residual_mean_square()[i].to_f64() as f32;
+        let m = obs.residual_mean_square()[i].to_f32();
         if m.is_finite() {
             self.residual_sample(i, m, learning);
         }
@@ -540,8 +579,8 @@ impl Monitor {
             Ok(o) if l > R::ZERO => {
                 let t = o.tension / l;
                 [
-                    (t * (o.payload[0] - q[0])).to_f64() as f32,
-                    (t * (o.payload[1] - q[1])).to_f64() as f32,
+                    (t * (o.payload[0] - q[0])).to_f32(),
+                    (t * (o.payload[1] - q[1])).to_f32(),
                 ]
             }
             _ => [0.0; N],
@@ -618,7 +657,11 @@ impl Monitor {
         }
     }
 
+    /// The oldest pending alarm. The pending alarms are a prefix of `pending` ([`Monitor::push`]
+    /// fills the first free slot, this takes the first and shifts the rest down), so an empty
+    /// first slot means none is pending: then nothing is moved (the common case, every period).
     fn pop(&mut self) -> Option<Alarm> {
+        self.pending[0]?;
         let first = self.pending[0].take();
         self.pending.rotate_left(1);
         first
@@ -659,6 +702,13 @@ impl Monitor {
     /// [`MOVE_BINS`] judged bins give no level. The level's band is its variance over moves,
     /// learned over [`Settings::level_learn`] moves, then tracked slowly by the levels inside it while
     /// no alarm of the map stands. Also refreshes the pooled band (mean band of the judged bins).
+    ///
+    /// Cost (this and an evaluation in one period make the monitor's worst case): one pass
+    /// over the map's 64 bins ([`SlidingMap::judged_bands`]: the judged bands summed in bin
+    /// order, the crossed deviations keyed and split around the previous level) and one
+    /// selection among the part that holds the median ([`median_of_split_keys`]). The level,
+    /// the pooled band and every decision are the same, bit for bit, as from a loop over
+    /// [`SlidingMap::view`] and `select_nth_unstable_by(n / 2, f32::total_cmp)`.
     fn move_done(&mut self, i: usize, dj: usize, learning: bool) {
         let s = self.settings.map;
         let k2 = self.settings.k * self.settings.k;
@@ -668,28 +718,18 @@ impl Monitor {
         let Some((lo, hi)) = c.span.take() else {
             return;
         };
-        let mut devs = [0.0f32; BINS];
-        let mut crossed = 0usize;
-        let mut sum = 0.0f32;
-        let mut judged = 0usize;
-        for b in 0..BINS {
-            let v = map.view(b, &s);
-            if v.judged {
-                sum += v.band;
-                judged += 1;
-                if b >= usize::from(lo) && b <= usize::from(hi) {
-                    devs[crossed] = v.deviation;
-                    crossed += 1;
-                }
-            }
+        // The crossed deviations are split around the previous level (a pivot near the new
+        // median: the selection then works on about half of them).
+        let mut keys = [0i32; BINS];
+        let pivot = map::total_key(c.level);
+        let found = map.judged_bands(&s, usize::from(lo), usize::from(hi), pivot, &mut keys);
+        if found.judged > 0 {
+            c.pooled = found.sum / found.judged as f32;
         }
-        if judged > 0 {
-            c.pooled = sum / judged as f32;
-        }
-        if crossed < MOVE_BINS {
+        if found.below + found.above < MOVE_BINS {
             return;
         }
-        let level = median(&mut devs[..crossed]);
+        let level = median_of_split_keys(&mut keys, found.below, found.above);
         c.level = level;
         let standing = c.drift.standing() || c.local.standing();
         let learned = c.level_n >= self.settings.level_learn;
@@ -846,6 +886,11 @@ struct Local {
 
 /// The stretch of bins out of band (beyond the travel's level `level`) around the worst
 /// one, if it is at most `max_bins` wide and at most `max_bins` other bins are out of band.
+///
+/// One pass over the map decides which bins are out of band
+/// ([`SlidingMap::out_of_band`]); the stretch and its change then read only the bins it
+/// marked (the change of a marked bin recomputed as `deviation - level`, the same value), so
+/// no bin's band test is done twice.
 fn local_pattern(
     map: &SlidingMap,
     s: &MapSettings,
@@ -854,30 +899,18 @@ fn local_pattern(
     k2: f32,
     max_bins: usize,
 ) -> Option<Local> {
-    let out = |b: usize| -> Option<f32> {
-        let v = map.view(b, s);
-        let band = if v.band > pooled { v.band } else { pooled };
-        let e = v.deviation - level;
-        if v.judged && v.age <= FRESH_MOVES && e * e > k2 * band {
-            Some(e)
-        } else {
-            None
+    let scan = map.out_of_band(s, FRESH_MOVES, level, pooled, k2);
+    let (peak, peak_e) = scan.peak?;
+    let count = scan.count;
+    let sign = if peak_e < 0.0 { -1.0 } else { 1.0 };
+    // A bin out of band on the peak's side: its change beyond the level [N].
+    let same = |b: usize| -> Option<f32> {
+        if scan.mask.checked_shr(b as u32).unwrap_or(0) & 1 == 0 {
+            return None;
         }
+        let e = map.deviation(b) - level;
+        (e * sign > 0.0).then_some(e)
     };
-    let mut worst: Option<(usize, f32)> = None;
-    let mut count = 0usize;
-    for b in 0..BINS {
-        if let Some(e) = out(b) {
-            count += 1;
-            let a = if e < 0.0 { -e } else { e };
-            if worst.map_or(true, |(_, w)| a > w) {
-                worst = Some((b, a));
-            }
-        }
-    }
-    let (peak, _) = worst?;
-    let sign = out(peak).map_or(0.0, |e| if e < 0.0 { -1.0 } else { 1.0 });
-    let same = |b: usize| out(b).filter(|e| e * sign > 0.0);
     let mut lo = peak;
     while lo > 0 && same(lo - 1).is_some() {
         lo -= 1;
@@ -912,7 +945,6 @@ fn local_pattern(
     };
     let left = side(&mut (lo.saturating_sub(4)..lo.saturating_sub(1)));
     let right = side(&mut ((hi + 2).min(BINS)..(hi + 5).min(BINS)));
-    let peak_e = out(peak)?;
     let closer = match (left, right) {
         (Some(a), Some(b)) => {
             if (peak_e - a) * sign < (peak_e - b) * sign {
@@ -951,4 +983,93 @@ fn local_pattern(
         width: len as f32 * map.bin_width(),
         change,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The old median: `select_nth_unstable_by(n / 2, f32::total_cmp)` on the `f32`s.
+    fn median_by_total_cmp(v: &mut [f32]) -> f32 {
+        let n = v.len();
+        if n == 0 {
+            return 0.0;
+        }
+        *v.select_nth_unstable_by(n / 2, f32::total_cmp).1
+    }
+
+    #[test]
+    fn the_median_of_the_keys_is_the_total_cmp_median_bit_for_bit() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let specials = [0.0f32, -0.0, 1.0, -1.0, f32::MIN_POSITIVE, -f32::MAX, 1e-3];
+        for round in 0..4000 {
+            let n = (next() % (BINS as u64 + 1)) as usize;
+            let mut v = [0.0f32; BINS];
+            for x in v.iter_mut().take(n) {
+                let r = next();
+                *x = match round % 4 {
+                    // few distinct values: many ties
+                    0 => specials[(r % specials.len() as u64) as usize],
+                    // sorted runs and reversed runs
+                    1 => (r % 16) as f32 * 0.125 - 1.0,
+                    _ => (r as i64 as f64 / 1e18) as f32,
+                };
+            }
+            if round % 8 == 1 {
+                v[..n].sort_by(f32::total_cmp);
+            } else if round % 8 == 3 {
+                v[..n].sort_by(|a, b| b.total_cmp(a));
+            }
+            // Split around a pivot as `SlidingMap::judged_bands` does: one of the values, or
+            // a value of its own.
+            let pivot = if n > 0 && round % 3 == 0 {
+                map::total_key(v[(next() % n as u64) as usize])
+            } else {
+                map::total_key((next() as i64 as f64 / 4e18) as f32)
+            };
+            let mut keys = [0i32; BINS];
+            let (mut below, mut above) = (0usize, 0usize);
+            for x in &v[..n] {
+                let key = map::total_key(*x);
+                if key < pivot {
+                    keys[below] = key;
+                    below += 1;
+                } else {
+                    above += 1;
+                    keys[BINS - above] = key;
+                }
+            }
+            let got = median_of_split_keys(&mut keys, below, above);
+            let want = median_by_total_cmp(&mut v[..n]);
+            assert_eq!(got.to_bits(), want.to_bits(), "round {round}, n {n}");
+            // Every rank, against a sort.
+            if n > 0 && round % 16 == 0 {
+                let mut sorted = v;
+                sorted[..n].sort_by(f32::total_cmp);
+                for (rank, want) in sorted.iter().enumerate().take(n) {
+                    let mut keys = [0i32; BINS];
+                    for (k, x) in keys.iter_mut().zip(&v[..n]) {
+                        *k = map::total_key(*x);
+                    }
+                    let got = select_key(&mut keys[..n], rank).map(map::from_total_key);
+                    assert_eq!(got.map(f32::to_bits), Some(want.to_bits()));
+                }
+            }
+        }
+        let mut keys = [0i32; BINS];
+        assert_eq!(select_key(&mut keys[..3], 3), None);
+        assert_eq!(median_of_split_keys(&mut keys, 0, 0), 0.0);
+        for x in [0.0f32, -0.0, 1.5, -2.25, f32::INFINITY, f32::NEG_INFINITY] {
+            assert_eq!(
+                map::from_total_key(map::total_key(x)).to_bits(),
+                x.to_bits()
+            );
+        }
+    }
 }
