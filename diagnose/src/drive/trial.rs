@@ -244,29 +244,42 @@ pub(super) fn try_cause(
             ex.score(best.0).ok().map(|r| (r, None))
         }
         Cause::InputDelay if s.delay == 0.0 && !search.delay_grid.is_empty() => {
-            let grid = search.delay_grid;
-            let whole = super::grid::integer(grid, |d| {
-                fitted(Structure {
-                    delay: d as f64,
-                    ..s
-                })
-            })?;
-            // an edge is no finding and is not refined; inside, the delay is refined to a
-            // fraction of a sample between its whole neighbours
-            if whole.at_edge(grid, false) {
-                let note = format!(
-                    "delay at the largest value tried ({} samples, {:.4} s; grid edge)",
-                    whole.at,
-                    whole.at as f64 * search.dt
-                );
-                return ex.score(whole.value).ok().map(|r| (r, Some(note)));
-            }
-            let top = grid.last().map_or(0.0, |&g| g as f64);
-            let b = super::grid::fractional(whole, (0.0, top), DELAY_REFINE, |d| {
-                fitted(Structure { delay: d, ..s })
-            })?;
-            ex.score(b.value).ok().map(|r| (r, None))
+            try_delay(s, search, &fitted)
         }
         _ => None,
     }
+}
+
+/// The delay added to structure `s`: the best whole delay of the grid, refined to a fraction
+/// of a sample between its neighbours ([`DELAY_REFINE`]); at the grid's edge, the whole value
+/// with a note (no finding, not refined). `fitted`: a structure fitted on the fitting runs
+/// with its simulated error there.
+fn try_delay(
+    s: Structure,
+    search: &Search<'_>,
+    fitted: &dyn Fn(Structure) -> Option<(Estimate, f64)>,
+) -> Option<(Scored, Option<String>)> {
+    let ex = search.ex;
+    let grid = search.delay_grid;
+    let whole = super::grid::integer(grid, |d| {
+        fitted(Structure {
+            delay: d as f64,
+            ..s
+        })
+    })?;
+    // an edge is no finding and is not refined; inside, the delay is refined to a
+    // fraction of a sample between its whole neighbours
+    if whole.at_edge(grid, false) {
+        let note = format!(
+            "delay at the largest value tried ({} samples, {:.4} s; grid edge)",
+            whole.at,
+            whole.at as f64 * search.dt
+        );
+        return ex.score(whole.value).ok().map(|r| (r, Some(note)));
+    }
+    let top = grid.last().map_or(0.0, |&g| g as f64);
+    let b = super::grid::fractional(whole, (0.0, top), DELAY_REFINE, |d| {
+        fitted(Structure { delay: d, ..s })
+    })?;
+    ex.score(b.value).ok().map(|r| (r, None))
 }
