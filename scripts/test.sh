@@ -62,7 +62,15 @@ board_link --bin board-stm32
 # --- end board-stm32
 
 step "host tests (including the QEMU cross-checks, marked ignored for plain cargo test)"
-cargo test --workspace --exclude firmware --exclude board-stm32 -- --include-ignored
+# `cargo test` runs its binaries one after another and holds the build lock while they run: a
+# binary whose last test runs alone leaves a core idle. The binaries are built here and run
+# two at a time, the slowest first (scripts/run-test-binaries.py; same binaries, arguments,
+# working directories), then the doctests. Plain `cargo test --workspace --exclude firmware
+# --exclude board-stm32 -- --include-ignored` runs the same tests one binary at a time.
+host_tests_json="${CARGO_TARGET_DIR:-target}/host-tests.json"
+cargo test --workspace --exclude firmware --exclude board-stm32 --no-run --message-format=json-render-diagnostics > "$host_tests_json"
+python3 scripts/run-test-binaries.py --jobs 2 -- --include-ignored < "$host_tests_json"
+cargo test --workspace --exclude firmware --exclude board-stm32 --doc
 
 # ---- FMU (issue 13): build crane.fmu, FMPy validates and simulates it ------------------
 # The C-ABI tests (`cargo test -p crane-fmu`) ran with the host tests above. Here: the packed

@@ -1,4 +1,5 @@
-//! Wall time of whole single-axis diagnoses (issue 20's speed figures; one thread):
+//! Wall time of whole single-axis diagnoses (issue 20's speed figures; the fitting and
+//! held-out runs are simulated in parallel on rayon's pool, one thread per core):
 //! - `cicese_joint1`: the real direct-drive arm, joint 1 (`examples/cicese_joint1`, read from
 //!   `../shared`; skipped with a line when absent). Goal: under 5 s.
 //! - `long_10khz_120s`: a 10 kHz x 120 s log (two 60 s runs of pulses, 1.2 M rows, 1 um
@@ -6,8 +7,8 @@
 //!   from the files (load included). Goal: under 60 s.
 //!
 //! `cargo bench -p crane-diagnose --bench diagnose` (10 samples each: about 1 and 7
-//! minutes). Measured 2026-11-27 on this 2-core machine, idle: `cicese_joint1` 0.641 s,
-//! `long_10khz_120s` 38.6 s; both goals met.
+//! minutes). Measured 2026-11-27 on this 2-core machine, idle, before the runs were simulated
+//! in parallel (one thread): `cicese_joint1` 0.641 s, `long_10khz_120s` 38.6 s; both goals met.
 
 use crane_diagnose::{diagnose, DiagnoseOptions};
 use crane_model::{Drive, DriveParams};

@@ -248,6 +248,10 @@ fn one_case() {
 #[ignore = "exploration print-out"]
 fn coverage() {
     use crane_ident::data::Samples;
+    if std::env::var_os("EXPLORE").is_none() {
+        eprintln!("skipped: set EXPLORE=1 to print the runs' position coverage");
+        return;
+    }
     for seed in 100..106u64 {
         let h = draw("none", seed);
         let ds = dataset(&h, seed, 2, SECONDS).expect("rig runs");

@@ -10,6 +10,7 @@ use super::prep::{moves, Prepared, Thresholds};
 use super::score::{run_nmae, score, simulate, Scored};
 use crate::DiagnoseError;
 use crane_model::drive::Motion;
+use rayon::prelude::*;
 
 /// The sliding least-squares dry level replaces the level at first motion (see
 /// [`DryLevel`]) when its simulated NMAE of the fitting runs is this many times smaller.
@@ -101,7 +102,8 @@ impl<'a> Experiment<'a> {
     /// simulate): the measure every grid-searched value is chosen by. Infinite, without a
     /// simulation, for a model whose inertia the log does not resolve
     /// ([`Flag::InertiaUnresolved`]): no value is chosen by it, and its simulation would take
-    /// thousands of steps per sample.
+    /// thousands of steps per sample. The runs are simulated in parallel (rayon) and summed in
+    /// their order: the same value as a serial loop.
     pub fn fit_error(&self, est: &Estimate) -> f64 {
         if est
             .flags
@@ -110,9 +112,10 @@ impl<'a> Experiment<'a> {
         {
             return f64::INFINITY;
         }
+        // the runs in parallel, summed in their order below: the same bits as a serial loop
         let v: Vec<f64> = self
             .fit
-            .iter()
+            .par_iter()
             .map(|r| {
                 simulate(est, r)
                     .map(|s| run_nmae(&s, r, self.th.quantum))

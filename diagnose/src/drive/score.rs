@@ -3,6 +3,7 @@
 use super::estimate::{Estimate, Structure};
 use super::prep::Prepared;
 use crane_ident::simulate::{simulate_drive, SimulateError};
+use rayon::prelude::*;
 
 /// A fitted model with its simulations of the held-out runs.
 #[derive(Clone, Debug)]
@@ -133,11 +134,18 @@ pub fn nmae_no_motion(run: &Prepared, quantum: f64) -> f64 {
 
 /// Simulates and scores a fit on the held-out runs; `Err` names the run whose simulation
 /// failed.
+///
+/// The runs are simulated in parallel (rayon), each on its own; the results are gathered in
+/// the runs' order, so the score and the first failing run named are those of a serial loop.
 pub fn score(est: Estimate, held: &[&Prepared], quantum: f64) -> Result<Scored, String> {
+    let simulated: Vec<Result<Vec<f64>, String>> = held
+        .par_iter()
+        .map(|r| simulate(&est, r).map_err(|e| format!("{}: {e}", r.run.name)))
+        .collect();
     let mut per_run = Vec::with_capacity(held.len());
     let mut sims = Vec::with_capacity(held.len());
-    for r in held {
-        let sim = simulate(&est, r).map_err(|e| format!("{}: {e}", r.run.name))?;
+    for (r, sim) in held.iter().zip(simulated) {
+        let sim = sim?;
         per_run.push(run_nmae(&sim, r, quantum));
         sims.push(sim);
     }

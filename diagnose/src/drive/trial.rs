@@ -22,8 +22,7 @@ pub const SATURATION_QUANTILES: [f64; 11] =
 /// a fine screw or gear (a few %) to a worm gear near self-locking, geometric by
 /// [`GRID_RATIO`] ([`super::grid::geometric`]).
 pub const LOAD_RANGE: (f64, f64) = (0.01, 0.8);
-/// Largest ratio between neighbouring points of a geometric grid (dead band, load share,
-/// Stribeck velocity). The fitting runs' simulated error of a stick-slip log is not smooth in
+/// Largest ratio between neighbouring points of a geometric grid (dead band, load share). The fitting runs' simulated error of a stick-slip log is not smooth in
 /// these parameters: whether the axis sticks at a stair or slips on changes with a few percent
 /// of a level, and the error drops in a narrow notch around the true value (stranger s055,
 /// a load share 0.276: 0.37 % there against 1.33 % at 0.1 and 1.76 % at 0.2). A coarse grid
@@ -33,6 +32,12 @@ pub const LOAD_RANGE: (f64, f64) = (0.01, 0.8);
 pub const GRID_RATIO: f64 = 1.2;
 /// The quantile of the moving |v| that tops the Stribeck grid.
 pub const STRIBECK_TOP_QUANTILE: f64 = 0.9;
+/// Stribeck velocities tried: this many, geometric from the motion threshold to the
+/// [`STRIBECK_TOP_QUANTILE`]. Not [`GRID_RATIO`]: that grid (38 points on stranger s023, each
+/// one a simulation whose substeps grow as the velocity falls, `crane_ident::simulate::substeps`)
+/// took 83 s of one diagnosis and named no Stribeck case the 9 points missed (published and
+/// held-back stranger sets, 2026-11-27).
+pub const STRIBECK_POINTS: usize = 9;
 /// Golden-section steps refining the best dead band, saturation or load-share grid value (on the
 /// fitting runs): the bracket shrinks to 0.618^8, under 2 % of the grid step.
 pub const GRID_REFINE: usize = 10;
@@ -94,7 +99,7 @@ pub(super) fn saturation_grid(fit: &[&Prepared], th: &Thresholds, umax: f64) -> 
 /// The Stribeck velocities tried [m/s or rad/s]: from the motion threshold `v_move` (a
 /// weakening faster than that is stiction: the friction drops before the motion is seen) to
 /// the [`STRIBECK_TOP_QUANTILE`] of |v| over the fitting runs' moving samples (a weakening
-/// slower than that never ends within the motions), geometric by [`GRID_RATIO`]; empty when
+/// slower than that never ends within the motions), [`STRIBECK_POINTS`] geometric; empty when
 /// that range is empty (no motion faster than the threshold). The best is refined between its
 /// neighbours by [`GRID_REFINE`] golden-section steps.
 pub(super) fn stribeck_grid(fit: &[&Prepared], th: &Thresholds) -> Vec<f64> {
@@ -111,7 +116,10 @@ pub(super) fn stribeck_grid(fit: &[&Prepared], th: &Thresholds) -> Vec<f64> {
     if top.is_nan() || top <= th.v_move {
         return Vec::new();
     }
-    super::grid::geometric(th.v_move, top, GRID_RATIO)
+    let r = (top / th.v_move).powf(1.0 / (STRIBECK_POINTS - 1) as f64);
+    (0..STRIBECK_POINTS)
+        .map(|k| th.v_move * r.powi(k as i32))
+        .collect()
 }
 
 /// Fits and scores the current structure plus one cause; for grid-searched causes the best
