@@ -21,8 +21,9 @@
 #![allow(non_snake_case, non_camel_case_types)]
 
 use crate::description::{guid, MODEL_IDENTIFIER};
-use crate::instance::{Failure, Instance, Phase, Status};
+use crate::instance::Instance;
 use crate::snapshot::Snapshot;
+use crate::status::{Failure, Phase, Status};
 use std::ffi::{c_char, c_int, c_void, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 

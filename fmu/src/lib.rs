@@ -24,4 +24,5 @@ pub mod description;
 pub mod ffi;
 pub mod instance;
 pub mod snapshot;
+pub mod status;
 pub mod variables;

@@ -28,7 +28,7 @@
 //! | 8 | FNV-1a 64 of every byte before |
 
 use crate::description::{fnv1a, guid};
-use crate::instance::{Failure, Phase};
+use crate::status::{Failure, Phase};
 use crate::variables::{self, Causality, LimitEnd, Settings, Slot};
 use crane_model::{Mode, State};
 

@@ -21,6 +21,7 @@ pub mod py_batch;
 pub mod py_crane;
 pub mod py_params;
 pub mod rollout;
+pub mod setup;
 pub mod sim;
 pub mod snapshot;
 

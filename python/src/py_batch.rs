@@ -7,7 +7,8 @@ use crate::args::{
 use crate::arrays::{array, tables_dict};
 use crate::errors::{py_result, Failure, Fallible};
 use crate::py_params::params_from_dict_unchecked;
-use crate::rollout::{self, mode_code, Inputs, Setup};
+use crate::rollout::{self, Inputs};
+use crate::setup::{mode_code, Setup};
 use crate::sim::Sim;
 use crate::snapshot;
 use crane_model::{Config, Crane, Extensions, State};

@@ -5,7 +5,7 @@ use crate::arrays::{state_array, tables_dict};
 use crate::errors::{py_result, Failure};
 use crate::py_params::PyParams;
 use crate::rollout as run;
-use crate::rollout::{mode_code, Setup};
+use crate::setup::{mode_code, Setup};
 use crate::sim::Sim;
 use crate::snapshot;
 use crane_model::Config;

@@ -9,7 +9,7 @@
 //! `output` and every later step with the same bits as the one the snapshot was taken of.
 
 use crate::errors::{Failure, Fallible};
-use crate::rollout::Setup;
+use crate::setup::Setup;
 use crane_model::{Crane, Error, Mode, State, StepError, StepReport, U_MAX};
 
 /// The input the model applies and records for voltages `u` [V]: each saturated to

@@ -28,7 +28,7 @@
 use crate::args::{f64_array, law_arg, shape_str, state_from_flat};
 use crate::errors::{py_result, Failure};
 use crate::py_params::{params_from_dict_unchecked, PyParams};
-use crate::rollout::{mode_code, Setup};
+use crate::setup::{mode_code, Setup};
 use crate::sim::Sim;
 use crane_model::{Config, Extensions, FrictionLaw, State, Stiction};
 use pyo3::prelude::*;

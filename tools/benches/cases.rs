@@ -4,7 +4,8 @@
 
 use crane_tools::cases::Case;
 use crane_tools::reference;
-use crane_tools::study::{tanh_ode45, GAMMAS};
+use crane_tools::study::GAMMAS;
+use crane_tools::tanh_run::tanh_ode45;
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::time::Duration;
 

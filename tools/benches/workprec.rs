@@ -12,7 +12,7 @@ use crane_tools::adaptive_run::{hybrid_adaptive, tolerances};
 use crane_tools::cases::Case;
 use crane_tools::ode45::Options;
 use crane_tools::reference;
-use crane_tools::study::tanh_ode45;
+use crane_tools::tanh_run::tanh_ode45;
 use crane_tools::workprec::{tanh_bdf, tanh_rosenbrock};
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::time::Duration;

@@ -13,7 +13,7 @@ use crane_tools::adaptive_run::{hybrid_adaptive, tolerances};
 use crane_tools::cases::Case;
 use crane_tools::ode45::Options;
 use crane_tools::reference;
-use crane_tools::study::time_best;
+use crane_tools::timing::time_best;
 use crane_tools::workprec::tanh_bdf;
 
 /// Hybrid tolerances, half-decades.

@@ -9,7 +9,8 @@
 
 use crate::error::{Error, Result};
 use crate::output::Outputs;
-use crate::study::{tanh_name, CaseData};
+use crate::study::CaseData;
+use crate::tanh_run::tanh_name;
 use crane_model::Mode;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};

@@ -39,4 +39,5 @@ pub mod reference;
 pub mod smooth;
 pub mod study;
 pub mod tanh_run;
+pub mod timing;
 pub mod workprec;

@@ -23,6 +23,8 @@ use crate::cases::{Case, CaseId};
 use crate::error::{Error, Result};
 use crate::reference::{self, Convergence, Trajectory};
 use crate::smooth::{pack, rk4_step_k1, unpack, Friction, Smooth, Y};
+use crate::tanh_run::{tanh_name, tanh_ode45};
+use crate::timing::time_best;
 use crate::{adaptive_run, ode45, workprec};
 use serde::Serialize;
 use std::time::Instant;
@@ -196,32 +198,6 @@ pub struct CaseData {
     pub tanh: Vec<(f64, Trajectory)>,
 }
 
-/// Runs `f` until `budget` seconds are spent (3 to 50 runs); returns the fastest time and
-/// the last result.
-pub fn time_best<T>(budget: f64, mut f: impl FnMut() -> Result<T>) -> Result<(f64, T)> {
-    let start = Instant::now();
-    let mut best = f64::INFINITY;
-    let mut runs = 0;
-    loop {
-        let t0 = Instant::now();
-        let r = f()?;
-        best = best.min(t0.elapsed().as_secs_f64());
-        runs += 1;
-        if runs >= 50 || (runs >= 3 && start.elapsed().as_secs_f64() >= budget) {
-            return Ok((best, r));
-        }
-    }
-}
-
-/// A tanh model of the case integrated by ode45; returns the trajectory and the solver's work.
-pub fn tanh_ode45(
-    case: &Case,
-    gamma: f64,
-    opts: &ode45::Options,
-) -> Result<(Trajectory, ode45::Stats)> {
-    crate::tanh_run::tanh_run(case, gamma, crate::tanh_run::GridSolver::Dp45, opts)
-}
-
 /// A tanh model of the case by fixed-step RK4 at step `h` (continuous-time input at the
 /// stage times). Steps longer than the grid keep the accelerations for the interpolant (the
 /// first stage of the next step, so at no extra cost).
@@ -307,15 +283,6 @@ fn paper(case: CaseId, k: usize) -> (f64, f64) {
 
 fn gamma_index(g: f64) -> Option<usize> {
     GAMMAS.iter().position(|&x| x == g).map(|i| i + 1)
-}
-
-/// Name of a tanh model, e.g. `tanh(1000 v)`.
-pub fn tanh_name(g: f64) -> String {
-    if g == 1.0 {
-        "tanh(v)".into()
-    } else {
-        format!("tanh({g} v)")
-    }
 }
 
 /// Runs the study of one case. `progress` is told what is being run.

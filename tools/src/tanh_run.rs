@@ -56,3 +56,17 @@ pub fn tanh_run(
     tr.steps = stats.accepted;
     Ok((tr, stats))
 }
+
+/// A tanh model of the case integrated by ode45; returns the trajectory and the solver's work.
+pub fn tanh_ode45(case: &Case, gamma: f64, opts: &Options) -> Result<(Trajectory, Stats)> {
+    tanh_run(case, gamma, GridSolver::Dp45, opts)
+}
+
+/// Name of a tanh model, e.g. `tanh(1000 v)`.
+pub fn tanh_name(g: f64) -> String {
+    if g == 1.0 {
+        "tanh(v)".into()
+    } else {
+        format!("tanh({g} v)")
+    }
+}

@@ -1,7 +1,7 @@
 //! Work-precision: wall time against the error of the compared velocity, per setting, as
 //! ODE-solver benchmarks draw it (log-log), for one case.
 //!
-//! Series (each point one whole run, timed as [`crate::study::time_best`]; error is the RMSE
+//! Series (each point one whole run, timed as [`crate::timing::time_best`]; error is the RMSE
 //! of the compared velocity on the 1 ms grid against the 10 us hybrid reference):
 //! - hybrid, fixed step ([`crate::reference::hybrid`]): a ladder of steps 200 ms .. 0.1 ms,
 //!   the full state put on the grid by cubic Hermite interpolation inside the timed run
@@ -23,7 +23,8 @@ use crate::error::{Error, Result};
 use crate::ode45;
 use crate::output::Outputs;
 use crate::reference::{self, Trajectory};
-use crate::study::{tanh_name, tanh_ode45, time_best};
+use crate::tanh_run::{tanh_name, tanh_ode45};
+use crate::timing::time_best;
 use plotters::prelude::*;
 use serde::Serialize;
 use std::path::Path;

@@ -6,7 +6,7 @@ use crane_tools::bdf::{integrate, Failure};
 use crane_tools::cases::Case;
 use crane_tools::ode45::Options;
 use crane_tools::reference;
-use crane_tools::study::tanh_ode45;
+use crane_tools::tanh_run::tanh_ode45;
 use crane_tools::workprec::tanh_bdf;
 
 const LAMBDA: f64 = 1e4;

@@ -4,7 +4,8 @@ use crane_model::dynamics::{eval, Coeffs, Law};
 use crane_model::{Config, Crane, FrictionLaw, Mode, Params, State};
 use crane_tools::cases::Case;
 use crane_tools::smooth::{pack, rk4_step, unpack, Friction, Smooth};
-use crane_tools::study::{tanh_ode45, tanh_rk4, GAMMAS};
+use crane_tools::study::{tanh_rk4, GAMMAS};
+use crane_tools::tanh_run::tanh_ode45;
 use crane_tools::{montecarlo, reference};
 
 const H: f64 = 1e-3;

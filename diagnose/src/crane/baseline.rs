@@ -4,8 +4,8 @@
 
 use super::asymmetry::asym_cols;
 use super::gather::{gather, gather_series, sumsq, Gathered};
+use super::nmae::Ctx;
 use super::residual::{axis_params, drive_series, Prep};
-use super::runs::Setup;
 use super::simulate::simulate_checked;
 use super::{Ext, AXIS_NAMES, CUTOFF_HZ};
 use crate::fit::ls;
@@ -93,14 +93,21 @@ pub(super) struct BaselineScore {
     pub(super) errors: Vec<AxisError>,
 }
 
-/// Scores the baseline of `setup`: simulated NMAE on both parts and force residuals; an error
+/// Scores the baseline of the prepared runs `ctx`: simulated NMAE on both parts and force residuals; an error
 /// naming the first run it does not simulate ([`baseline_failure`]) when the held-out part
 /// cannot be scored.
-pub(super) fn score(setup: &Setup) -> Result<BaselineScore, DiagnoseError> {
-    let ctx = &setup.ctx;
+/// `names`: the runs' names in the order of `ctx.preps`; `base_doc`: what the baseline is;
+/// `noise`: the encoder quantisation NMAE per axis [%]. (The stage's inputs, not the
+/// `runs::Setup` holding them: `runs` calls this module's re-fit.)
+pub(super) fn score(
+    ctx: &Ctx,
+    names: &[&str],
+    base_doc: &str,
+    noise: [f64; 3],
+) -> Result<BaselineScore, DiagnoseError> {
     let before_h = ctx
         .nmae(None, true)
-        .ok_or_else(|| baseline_failure(&ctx.preps, &setup.names, &setup.base_doc))?;
+        .ok_or_else(|| baseline_failure(&ctx.preps, names, base_doc))?;
     let before_f = ctx.nmae(None, false).unwrap_or([f64::NAN; 3]);
     let fit_g: Vec<Gathered> = (0..3).map(|i| gather(&ctx.preps, i, false)).collect();
     let held_g: Vec<Gathered> = (0..3).map(|i| gather(&ctx.preps, i, true)).collect();
@@ -121,7 +128,7 @@ pub(super) fn score(setup: &Setup) -> Result<BaselineScore, DiagnoseError> {
             axis: AXIS_NAMES[i].into(),
             nmae_fit: before_f[i],
             nmae_held_out: before_h[i],
-            nmae_noise: setup.noise[i],
+            nmae_noise: noise[i],
             nmae_own_log: None,
             force_rms_fit_n: (sumsq(&fit_g[i].r) / n_f).sqrt(),
             force_rms_held_out_n: (sse_b[i] / n_h).sqrt(),

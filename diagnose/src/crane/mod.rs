@@ -73,7 +73,7 @@ pub const CRANE_CAUSES: [Cause; 7] = [
 /// Diagnoses crane runs.
 pub fn diagnose_crane(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, DiagnoseError> {
     let setup = runs::prepare(ds, opts)?;
-    let base = baseline::score(&setup)?;
+    let base = baseline::score(&setup.ctx, &setup.names, &setup.base_doc, setup.noise)?;
     let found = candidate::fit_candidates(&setup, &base);
     let mut scored = heldout::score_candidates(&setup.ctx, &base, found.cands);
     stiction::refine_by_simulation(&setup.ctx, &base, &mut scored);

@@ -20,16 +20,19 @@
 //!    are searched on grids ([`grid`]), the bump's site from the residual ([`local`]); a value
 //!    at a grid's edge is never named.
 //! 5. `verdict`: the final model and the verdict (`none` only within the data's own floors).
-//! 6. `report`: the report, and [`plots`]: measured vs simulated runs, residuals, stick/slip
+//! 6. `report`: the report (`evidence`: a finding's parameters and force residual; [`info`]:
+//!    what the data set says about the axis), and [`plots`]: measured vs simulated runs, residuals, stick/slip
 //!    marks, force vs velocity.
 
 pub mod breakaway;
 pub mod cause;
 mod checks;
 pub mod estimate;
+mod evidence;
 pub mod experiment;
 pub mod floor;
 pub mod grid;
+pub mod info;
 pub mod local;
 mod physical;
 pub mod pipeline;
@@ -44,5 +47,6 @@ mod verdict;
 
 pub use cause::DRIVE_CAUSES;
 pub use estimate::{Dir, Estimate, Flag, Structure};
-pub use pipeline::{diagnose_drive, DriveInfo};
+pub use info::DriveInfo;
+pub use pipeline::diagnose_drive;
 pub use prep::{DriveRun, Prepared, Thresholds};

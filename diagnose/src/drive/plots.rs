@@ -8,7 +8,7 @@
 //!   fitted friction curves of the baseline and the final model and their breakaway levels.
 
 use super::estimate::{applied_input, restoring_shape};
-use super::pipeline::DriveInfo;
+use super::info::DriveInfo;
 use super::prep::{Prepared, Thresholds};
 use super::score::Scored;
 use crane_model::drive::{DriveParams, PositionForce};

@@ -5,10 +5,10 @@
 
 use super::cause::DRIVE_CAUSES;
 use super::estimate::{Dir, Estimate};
+use super::evidence::{cause_parameters, extra_parameters, force_rms};
 use super::experiment::{at_floor, Baseline, Experiment};
+use super::info::DriveInfo;
 use super::physical::{load_overlap, physical};
-use super::pipeline::DriveInfo;
-use super::report::{cause_parameters, extra_parameters, force_rms};
 use super::score::{nmae_no_motion, Scored};
 use super::trial::{try_cause, Search};
 use crate::report::nmae_or_diverged::text as pct;

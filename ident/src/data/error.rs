@@ -181,27 +181,28 @@ pub enum Problem {
     BadValue(String),
 }
 
-/// Why a run's time stamps are refused (thresholds: `data::timebase`).
+/// Why a run's time stamps are refused (thresholds: [`super::limits`], applied by
+/// `data::timebase`).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum Timing {
     /// A step longer than `MAX_GAP_STEPS` median steps: rows were lost.
-    #[error("rows missing: the time step before this row is {} s, {:.1} times the median step {} s (more than {}); holding the last value over the gap would invent a rest, so the run is refused (split it into runs at the gap)", Num(*step_s), step_s / median_step_s, Num(*median_step_s), crate::data::timebase::MAX_GAP_STEPS)]
+    #[error("rows missing: the time step before this row is {} s, {:.1} times the median step {} s (more than {}); holding the last value over the gap would invent a rest, so the run is refused (split it into runs at the gap)", Num(*step_s), step_s / median_step_s, Num(*median_step_s), super::limits::MAX_GAP_STEPS)]
     Gap {
         /// The step [s].
         step_s: f64,
         /// The run's median step [s].
         median_step_s: f64,
     },
-    /// A median sample rate outside [`crate::data::timebase::RATE_RANGE_HZ`]: almost surely
+    /// A median sample rate outside [`super::limits::RATE_RANGE_HZ`]: almost surely
     /// stamps in another unit than `time_unit` says (milliseconds or sample indices read as
     /// seconds, or the reverse).
-    #[error("the median time step is {} s, a sample rate of {:.4e} Hz, outside ({}, {}) Hz: is `time_unit` in dataset.toml right (\"s\", \"ms\", \"us\")? time stamps in milliseconds or sample indices read as seconds give 1 Hz or less", Num(*median_step_s), 1.0 / median_step_s, crate::data::timebase::RATE_RANGE_HZ.0, crate::data::timebase::RATE_RANGE_HZ.1)]
+    #[error("the median time step is {} s, a sample rate of {:.4e} Hz, outside ({}, {}) Hz: is `time_unit` in dataset.toml right (\"s\", \"ms\", \"us\")? time stamps in milliseconds or sample indices read as seconds give 1 Hz or less", Num(*median_step_s), 1.0 / median_step_s, super::limits::RATE_RANGE_HZ.0, super::limits::RATE_RANGE_HZ.1)]
     Rate {
         /// The run's median step [s].
         median_step_s: f64,
     },
     /// Irregular stamps in a crane run, which must be uniformly sampled.
-    #[error("irregular time stamps: the step ending here is {} s, the median step {} s ({irregular_steps} steps deviate more than {:.0} %); crane runs must be uniformly sampled (rows dropped or an asynchronous log?)", Num(*step_s), Num(*median_step_s), crate::data::timebase::JITTER_TOLERANCE * 100.0)]
+    #[error("irregular time stamps: the step ending here is {} s, the median step {} s ({irregular_steps} steps deviate more than {:.0} %); crane runs must be uniformly sampled (rows dropped or an asynchronous log?)", Num(*step_s), Num(*median_step_s), super::limits::JITTER_TOLERANCE * 100.0)]
     IrregularCrane {
         /// The most deviating step [s].
         step_s: f64,

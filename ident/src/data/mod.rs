@@ -10,6 +10,7 @@
 pub mod asynchronous;
 pub mod csv;
 pub mod error;
+pub mod limits;
 pub mod spec;
 pub mod timebase;
 pub mod units;
