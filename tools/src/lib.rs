@@ -32,6 +32,7 @@ pub mod error;
 pub mod figures;
 pub mod monitor;
 pub mod montecarlo;
+pub mod numfmt;
 pub mod ode23s;
 pub mod ode45;
 pub mod output;

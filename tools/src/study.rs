@@ -21,6 +21,7 @@
 
 use crate::cases::{Case, CaseId};
 use crate::error::{Error, Result};
+use crate::numfmt::fmt_g;
 use crate::reference::{self, Convergence, Trajectory};
 use crate::smooth::{pack, rk4_step_k1, unpack, Friction, Smooth, Y};
 use crate::tanh_run::{tanh_name, tanh_ode45};
@@ -563,18 +564,6 @@ fn fmt_opt(v: Option<f64>, w: usize) -> String {
     match v {
         Some(v) => format!("{:>w$}", fmt_g(v)),
         None => format!("{:>w$}", "-"),
-    }
-}
-
-/// Compact number: 4 significant digits, scientific when small or large.
-pub fn fmt_g(v: f64) -> String {
-    if v == 0.0 {
-        "0".into()
-    } else if !(1e-3..1e4).contains(&v.abs()) {
-        format!("{v:.3e}")
-    } else {
-        let digits = (3 - v.abs().log10().floor() as i32).max(0) as usize;
-        format!("{v:.digits$}")
     }
 }
 

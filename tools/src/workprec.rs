@@ -20,6 +20,7 @@
 use crate::adaptive_run::{hybrid_adaptive, tolerances};
 use crate::cases::Case;
 use crate::error::{Error, Result};
+use crate::numfmt::fmt_g;
 use crate::ode45;
 use crate::output::Outputs;
 use crate::reference::{self, Trajectory};
@@ -276,7 +277,7 @@ pub fn compare(pts: &[Point]) -> Vec<Level> {
 /// Name of a point's setting, e.g. `h = 10 ms`, `rtol = 1e-6`.
 pub fn setting_name(p: &Point) -> String {
     let s = match p.method {
-        Method::HybridFixed => format!("h = {} ms", crate::study::fmt_g(p.setting * 1e3)),
+        Method::HybridFixed => format!("h = {} ms", fmt_g(p.setting * 1e3)),
         _ => format!("rtol = {:.0e}", p.setting),
     };
     match p.gamma {
@@ -295,7 +296,7 @@ pub fn table(name: &str, levels: &[Level]) -> String {
         "level", "hybrid", "tanh DP45", "tanh Rosenbrock 2(3)", "tanh BDF", "speed-up"
     ));
     let cell = |p: &Option<Point>| match p {
-        Some(p) => format!("{} ({} s)", setting_name(p), crate::study::fmt_g(p.time_s)),
+        Some(p) => format!("{} ({} s)", setting_name(p), fmt_g(p.time_s)),
         None => "not reached".into(),
     };
     for l in levels {
@@ -308,11 +309,11 @@ pub fn table(name: &str, levels: &[Level]) -> String {
             cell(&l.tanh_bdf),
             l.speedup
                 .map(|x| if x >= GOAL {
-                    format!("{}x", crate::study::fmt_g(x))
+                    format!("{}x", fmt_g(x))
                 } else {
                     format!(
                         "{}x (goal {GOAL:.0}x: missed by {:.2}x)",
-                        crate::study::fmt_g(x),
+                        fmt_g(x),
                         GOAL / x
                     )
                 })

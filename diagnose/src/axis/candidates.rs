@@ -2,9 +2,7 @@
 //! by the fitting rows' squared error), fitted with the baseline and scored on the held-out
 //! rows; the causes this path cannot fit or identify are listed beside them.
 
-use super::baseline::{BaselineFit, Design, Fitted};
-use super::prepare::Prepared;
-use super::{friction, input};
+use super::baseline::{Design, Fitted};
 use crate::Cause;
 use std::collections::BTreeMap;
 
@@ -61,19 +59,6 @@ impl Candidates {
             });
         }
     }
-}
-
-/// Stage 3: localized friction, stiction, direction asymmetry (symmetric baseline only),
-/// input delay and input dead band, in this order; the payload mass is never fitted here.
-pub(super) fn search(prep: &Prepared, base: &BaselineFit) -> Candidates {
-    let mut out = Candidates::default();
-    friction::localized_friction(prep, base, &mut out);
-    friction::stiction(prep, base, &mut out);
-    friction::direction_asymmetry(prep, base, &mut out);
-    input::input_delay(prep, base, &mut out);
-    input::input_deadzone(prep, base, &mut out);
-    out.not_ident.push(Cause::PayloadMass);
-    out
 }
 
 /// Named parameters.

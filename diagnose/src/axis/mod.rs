@@ -12,8 +12,9 @@
 //!    into inverse-dynamics rows (`rows.rs`: filtered, differentiated, decimated, rests cut
 //!    out), and the baseline's structure chosen.
 //! 2. `baseline.rs`: the baseline fitted on the fitting rows and scored on the held-out rows.
-//! 3. `candidates.rs`: every candidate extension searched on the fitting rows: the friction
-//!    shapes (`friction.rs`) and the input's delay and dead band (`input.rs`).
+//! 3. `search.rs`: every candidate extension searched on the fitting rows: the friction
+//!    shapes (`friction.rs`) and the input's delay and dead band (`input.rs`), gathered in
+//!    `candidates.rs`.
 //! 4. `score.rs`: candidates ranked by their held-out force BIC change, each with the
 //!    bootstrap lower bound of its held-out cut (`bootstrap.rs`).
 //! 5. `select.rs`: the support rule: the findings and the list of candidates.
@@ -30,6 +31,7 @@ mod prepare;
 mod report;
 mod rows;
 mod score;
+mod search;
 mod select;
 
 pub use bootstrap::{BOOT_BLOCKS, BOOT_LEVEL, BOOT_REPS};
@@ -43,7 +45,7 @@ use crane_ident::data::Dataset;
 pub fn diagnose_axis(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, DiagnoseError> {
     let prep = prepare::prepare(ds, opts)?;
     let base = baseline::fit_baseline(&prep)?;
-    let found = candidates::search(&prep, &base);
+    let found = search::search(&prep, &base);
     let scored = score::score(found.offered, &prep, &base);
     let unfitted = found.not_physical.into_iter().chain(found.not_ident);
     let mut sel = select::select(&scored, unfitted, &base, prep.held.f.len());

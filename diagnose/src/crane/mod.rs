@@ -5,8 +5,8 @@
 //! 1. `runs`: the crane runs, their split, the baseline model and the noise floors;
 //!    `residual` turns each run into inverse-dynamics force residuals per drive;
 //! 2. `baseline`: the baseline's simulated and force errors (the reference of every score);
-//! 3. `candidate`: every cause fitted in the force domain on the fitting part
-//!    (`bump`, `stiction`, `asymmetry`, `input`, `payload`);
+//! 3. `search`: every cause fitted in the force domain on the fitting part
+//!    (`bump`, `stiction`, `asymmetry`, `input`, `payload`; each a `candidate::Cand`);
 //! 4. `heldout`: each candidate's held-out force BIC and simulated score, then
 //!    `stiction::refine_by_simulation`;
 //! 5. `select`: the candidates reported, the findings kept, and the `verdict`;
@@ -25,6 +25,7 @@ mod payload;
 mod plot;
 mod residual;
 mod runs;
+mod search;
 mod select;
 mod simulate;
 mod stiction;
@@ -74,7 +75,7 @@ pub const CRANE_CAUSES: [Cause; 7] = [
 pub fn diagnose_crane(ds: &Dataset, opts: &DiagnoseOptions) -> Result<Report, DiagnoseError> {
     let setup = runs::prepare(ds, opts)?;
     let base = baseline::score(&setup.ctx, &setup.names, &setup.base_doc, setup.noise)?;
-    let found = candidate::fit_candidates(&setup, &base);
+    let found = search::fit_candidates(&setup, &base);
     let mut scored = heldout::score_candidates(&setup.ctx, &base, found.cands);
     stiction::refine_by_simulation(&setup.ctx, &base, &mut scored);
     scored.sort_by(|a, b| a.score.total_cmp(&b.score));
