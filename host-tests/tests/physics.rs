@@ -119,7 +119,7 @@ fn max_energy_rise(p: &Params, q: [f64; 5], qd: [f64; 5], steps: usize) -> (f64,
 #[test]
 fn energy_never_rises_with_friction_and_zero_input() {
     let p = Params::default();
-    let mut rng = Rng(7);
+    let mut rng = Rng::new(7);
     let mut worst = f64::NEG_INFINITY;
     for case in 0..40 {
         // Mid-range positions (no end stop reached), drive axes moving or stopped, swinging.
@@ -198,7 +198,7 @@ fn energy_never_rises_at_an_end_stop() {
 #[test]
 fn energy_never_rises_at_random_end_stops() {
     let p = Params::default();
-    let mut rng = Rng(31);
+    let mut rng = Rng::new(31);
     let mut worst = f64::NEG_INFINITY;
     let mut stops = 0usize;
     for case in 0..60 {
@@ -352,7 +352,7 @@ fn limits_hold_and_stopped_iff_zero_velocity() {
             payload_mass: [0.457, 0.2, 0.6, 0.064, 0.3, 0.5][run as usize],
             ..Params::default()
         };
-        let mut rng = Rng(100 + run);
+        let mut rng = Rng::new(100 + run);
         let progs = [
             random_program(&mut rng, 20.0),
             random_program(&mut rng, 20.0),
@@ -450,7 +450,7 @@ struct MillionRun {
 /// unchanged.
 fn million_random_steps() -> MillionRun {
     let p = Params::default();
-    let mut rng = Rng(2024);
+    let mut rng = Rng::new(2024);
     let q = [0.25, 0.3, 0.35, FRAC_PI_2, 0.0];
     let mut m = model(&p, H, FrictionLaw::Hybrid, q, [0.0; 5]);
     let mut run = MillionRun {
