@@ -7,6 +7,7 @@ mod common;
 use common::{
     compare, energy, frictionless, mass_matrix, model, random_program, ref_mode, Rng, FRAC_PI_2,
 };
+use crane_model::friction::dry;
 use crane_model::{Config, Crane, FrictionLaw, Mode, Params, State, StepError, MIN_HANG};
 use host_tests::reference::{RefCrane, RefError, RefEventKind, RefLaw, RefMode, RefParams};
 
@@ -298,10 +299,6 @@ fn stopped_axes_below_threshold_hold_bit_for_bit() {
     }
     // The swing went on (the test is not trivially static).
     assert!(m.state().qd[3] != 0.0);
-}
-
-fn dry(c: &[f64; 5], p: f64) -> f64 {
-    c.iter().rev().fold(0.0, |acc, &ci| acc * p + ci).max(0.0)
 }
 
 /// Default payload (0.457 kg, `m_p g = 4.48 N < Cbar_l = 8.583 N`): with `u_l = 0` the hoist

@@ -43,6 +43,7 @@
 use crate::coeffs::Coeffs;
 use crate::dopri5::{dense_weights, A, B, BI, C, E};
 use crate::dynamics::{at_state, eval, Eval, Law, Singular};
+use crate::friction::horner;
 use crate::integrator::{limit_violated, stop_limit, stop_velocity, sweep, velocity_violated};
 use crate::mode::Mode;
 use crate::modes::{candidate, margin, resolve};
@@ -325,11 +326,6 @@ impl Dense {
         }
         y
     }
-}
-
-/// A polynomial of degree 4 at `x`, coefficients lowest power first (Horner's scheme).
-fn horner(c: &[f64; 5], x: f64) -> f64 {
-    c[0] + x * (c[1] + x * (c[2] + x * (c[3] + x * c[4])))
 }
 
 /// The dense output of one accepted step as a polynomial in `th = (t - t0) / h`: cheap to
