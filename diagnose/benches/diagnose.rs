@@ -11,6 +11,7 @@
 //! in parallel (one thread): `cicese_joint1` 0.641 s, `long_10khz_120s` 38.6 s; both goals met.
 
 use crane_diagnose::{diagnose, DiagnoseOptions};
+use crane_ident::rng::Rng;
 use crane_model::{Drive, DriveParams};
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::io::Write;
@@ -34,7 +35,7 @@ fn write_long_log(dir: &Path) -> std::io::Result<()> {
     };
     let dt = 1e-4;
     let mut toml = String::from("position_unit = \"m\"\ninput_unit = \"N\"\n");
-    let mut seed = 0x2545_f491_4f6c_dd1du64;
+    let mut rng = Rng::new(1);
     for run in 0..2 {
         let name = format!("run{run}.csv");
         toml.push_str(&format!(
@@ -48,15 +49,13 @@ fn write_long_log(dir: &Path) -> std::io::Result<()> {
         let (mut u, mut left) = (0.0, 0usize);
         for k in 0..600_000usize {
             if left == 0 {
-                seed ^= seed << 13;
-                seed ^= seed >> 7;
-                seed ^= seed << 17;
-                let r = (seed >> 11) as f64 / (1u64 << 53) as f64;
+                let bits = rng.next_u64();
+                let r = (bits >> 11) as f64 / (1u64 << 53) as f64;
                 u = if u != 0.0 {
                     0.0
                 } else {
                     let a = 8.0 + 12.0 * r;
-                    if (seed >> 3) & 1 == 0 {
+                    if (bits >> 3) & 1 == 0 {
                         a
                     } else {
                         -a

@@ -99,9 +99,3 @@ pub fn delay_half_samples(u: &[f64], m: usize) -> Vec<f64> {
         })
         .collect()
 }
-
-/// Dry-friction polynomial magnitude (clamped at zero).
-pub fn dry(c: &[f64; 5], p: f64) -> f64 {
-    let v = (((c[4] * p + c[3]) * p + c[2]) * p + c[1]) * p + c[0];
-    v.max(0.0)
-}

@@ -8,6 +8,7 @@
 
 use crane_diagnose::{diagnose_dataset, DiagnoseOptions};
 use crane_ident::data::{load_dataset, RunKind};
+use crane_ident::rng::Rng;
 use std::path::Path;
 
 fn root() -> Option<std::path::PathBuf> {
@@ -16,27 +17,12 @@ fn root() -> Option<std::path::PathBuf> {
     Some(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
 }
 
-/// A small seeded generator (splitmix64): the subsets are the same on every run.
-struct Mix(u64);
-impl Mix {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
-}
-
 #[test]
 fn real_data_in_any_combination_never_panics() {
     let Some(root) = root() else {
         return;
     };
-    let mut rng = Mix(2024);
+    let mut rng = Rng::new(2024); // seeded: the subsets are the same on every run
     let (mut reports, mut errors) = (0, 0);
     for name in ["cicese_joint1", "cicese_joint2"] {
         let ds = load_dataset(&root.join("examples").join(name)).expect("example loads");
@@ -44,10 +30,14 @@ fn real_data_in_any_combination_never_panics() {
         for case in 0..24 {
             let mut sub = ds.clone();
             // case 0: a single run (time-block split); else a random subset with random roles
-            let k = if case == 0 { 1 } else { 1 + rng.below(n) };
+            let k = if case == 0 {
+                1
+            } else {
+                1 + rng.below(n as u64) as usize
+            };
             let mut idx: Vec<usize> = (0..n).collect();
             for i in 0..n {
-                let j = i + rng.below(n - i);
+                let j = i + rng.below((n - i) as u64) as usize;
                 idx.swap(i, j);
             }
             sub.runs = idx[..k]

@@ -31,6 +31,7 @@
 
 use crane_diagnose::{diagnose, DiagnoseOptions, Report};
 use crane_ident::data::{load_dataset, Gain, RunKind, VelocityEstimate};
+use crane_ident::rng::Rng;
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -116,11 +117,11 @@ impl Transform {
                 }
             }
             Transform::Jitter => {
-                let mut rng = 0x5eed_u64;
+                let mut rng = Rng::new(0x5eed); // seeded: the same stamps on every run
                 let mut t = c.t.clone();
                 for k in 1..t.len() - 1 {
                     let h = c.t[k + 1] - c.t[k];
-                    t[k] += 0.35 * h * (2.0 * unit(&mut rng) - 1.0);
+                    t[k] += 0.35 * h * rng.range(-1.0, 1.0);
                 }
                 let at = |v: &[f64]| -> Vec<f64> {
                     if v.is_empty() {
@@ -154,15 +155,6 @@ impl Transform {
             }
         }
     }
-}
-
-/// A uniform draw in [0, 1) (splitmix64: the same on every run).
-fn unit(state: &mut u64) -> f64 {
-    *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    let mut z = *state;
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
 }
 
 /// Linear interpolation of `v(t)` at `tq` (inside the samples).

@@ -428,6 +428,9 @@ pub struct RefStepInfo {
 }
 
 /// Horner sum `c0 + c1 p + ... + c4 p^4` of a dry-friction polynomial, not clamped [N].
+///
+/// Kept apart from `crane_model::friction::horner` on purpose: this module is the independent
+/// reference the model is checked against bit for bit, so it shares no code with the model.
 pub fn horner(c: &[f64; 5], p: f64) -> f64 {
     let mut acc = c[4];
     acc = acc * p + c[3];

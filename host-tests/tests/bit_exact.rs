@@ -521,7 +521,7 @@ fn default_extensions_give_the_same_bits_as_none() {
         let (mut plain, mut r) = pair(&p, h, FrictionLaw::Hybrid, q, qd);
         let (mut ext, mut r_ext) =
             pair_ext(&p, h, FrictionLaw::Hybrid, q, qd, &Extensions::default());
-        let mut rng = common::Rng(11);
+        let mut rng = common::Rng::new(11);
         let progs = [
             common::random_program(&mut rng, 20.0),
             common::random_program(&mut rng, 20.0),

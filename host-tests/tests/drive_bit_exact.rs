@@ -5,6 +5,7 @@
 //! a localised friction bump or dip, spring and pendulum, dead band, delay, end stops) and random inputs (holds, ramps, steps,
 //! sines, noise, bad values).
 
+use crane_ident::rng::Rng;
 use crane_model::{
     Drive, DriveParams, DriveStepError, LocalFriction, Mode, Motion, PositionForce,
     MAX_DRIVE_DELAY_STEPS,
@@ -215,7 +216,7 @@ fn inputs(pieces: &[(Piece, usize)], h: f64) -> Vec<f64> {
     let mut u = Vec::with_capacity(STEPS);
     'outer: loop {
         for &(p, len) in pieces {
-            let mut rng = 0u64;
+            let mut rng = Rng::new(0);
             for j in 0..len {
                 if u.len() == STEPS {
                     break 'outer;
@@ -230,12 +231,9 @@ fn inputs(pieces: &[(Piece, usize)], h: f64) -> Vec<f64> {
                     }
                     Piece::Noise(a, seed) => {
                         if j == 0 {
-                            rng = seed | 1;
+                            rng = Rng::new(seed);
                         }
-                        rng ^= rng << 13;
-                        rng ^= rng >> 7;
-                        rng ^= rng << 17;
-                        a * ((rng >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0)
+                        a * rng.range(-1.0, 1.0)
                     }
                     Piece::Bad(k, a) if j == 0 => match k {
                         0 => f64::NAN,

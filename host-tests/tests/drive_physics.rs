@@ -147,13 +147,9 @@ fn a_stopped_axis_stays_bit_exactly_put_below_breakaway() {
     // Holding force F - k x = 0.5 u + 0.25 - 50 * 0.01 = 0.5 u - 0.25 must stay in (-3, 2).
     let x0 = 0.01;
     let mut d: Drive = Drive::new(&p, H, x0).expect("valid");
-    let mut seed = 12345u64;
+    let mut rng = crane_ident::rng::Rng::new(12345);
     for n in 0..20_000 {
-        seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        let r = (seed >> 11) as f64 / (1u64 << 53) as f64; // [0, 1)
-        let u = -5.5 + 10.0 * r; // hold in [-3.0, 2.0)
+        let u = rng.range(-5.5, 4.5); // hold in [-3.0, 2.0)
         let u = if n % 1000 == 0 { 4.4999 } else { u }; // near the positive edge
         d.step(u).expect("step");
         assert_eq!(

@@ -7,6 +7,7 @@ mod common;
 use common::{
     compare, energy, frictionless, mass_matrix, model, random_program, ref_mode, Rng, FRAC_PI_2,
 };
+use crane_model::friction::dry;
 use crane_model::{Config, Crane, FrictionLaw, Mode, Params, State, StepError, MIN_HANG};
 use host_tests::reference::{RefCrane, RefError, RefEventKind, RefLaw, RefMode, RefParams};
 
@@ -119,7 +120,7 @@ fn max_energy_rise(p: &Params, q: [f64; 5], qd: [f64; 5], steps: usize) -> (f64,
 #[test]
 fn energy_never_rises_with_friction_and_zero_input() {
     let p = Params::default();
-    let mut rng = Rng(7);
+    let mut rng = Rng::new(7);
     let mut worst = f64::NEG_INFINITY;
     for case in 0..40 {
         // Mid-range positions (no end stop reached), drive axes moving or stopped, swinging.
@@ -198,7 +199,7 @@ fn energy_never_rises_at_an_end_stop() {
 #[test]
 fn energy_never_rises_at_random_end_stops() {
     let p = Params::default();
-    let mut rng = Rng(31);
+    let mut rng = Rng::new(31);
     let mut worst = f64::NEG_INFINITY;
     let mut stops = 0usize;
     for case in 0..60 {
@@ -300,10 +301,6 @@ fn stopped_axes_below_threshold_hold_bit_for_bit() {
     assert!(m.state().qd[3] != 0.0);
 }
 
-fn dry(c: &[f64; 5], p: f64) -> f64 {
-    c.iter().rev().fold(0.0, |acc, &ci| acc * p + ci).max(0.0)
-}
-
 /// Default payload (0.457 kg, `m_p g = 4.48 N < Cbar_l = 8.583 N`): with `u_l = 0` the hoist
 /// is self-locking and L stays bit for bit constant, hanging still and while the trolley is
 /// driven (moderate multisine voltages on X and Y make the payload swing).
@@ -352,7 +349,7 @@ fn limits_hold_and_stopped_iff_zero_velocity() {
             payload_mass: [0.457, 0.2, 0.6, 0.064, 0.3, 0.5][run as usize],
             ..Params::default()
         };
-        let mut rng = Rng(100 + run);
+        let mut rng = Rng::new(100 + run);
         let progs = [
             random_program(&mut rng, 20.0),
             random_program(&mut rng, 20.0),
@@ -450,7 +447,7 @@ struct MillionRun {
 /// unchanged.
 fn million_random_steps() -> MillionRun {
     let p = Params::default();
-    let mut rng = Rng(2024);
+    let mut rng = Rng::new(2024);
     let q = [0.25, 0.3, 0.35, FRAC_PI_2, 0.0];
     let mut m = model(&p, H, FrictionLaw::Hybrid, q, [0.0; 5]);
     let mut run = MillionRun {

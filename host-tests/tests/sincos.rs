@@ -3,6 +3,8 @@
 //! reference calls those two. That is only allowed because `sincos` returns the very same
 //! bits; this test checks it over the angles the model meets and well beyond.
 
+use crane_ident::rng::Rng;
+
 /// `None` if `sincos(x)` equals `(sin(x), cos(x))` bit for bit, else a description.
 fn mismatch(x: f64) -> Option<String> {
     let (s, c) = libm::sincos(x);
@@ -15,17 +17,6 @@ fn mismatch(x: f64) -> Option<String> {
             "x = {x:e} ({:#018x}): sincos ({s:e}, {c:e}) vs sin, cos ({s0:e}, {c0:e})",
             x.to_bits()
         ))
-    }
-}
-
-/// xorshift64* (deterministic).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
     }
 }
 
@@ -53,10 +44,10 @@ fn sincos_gives_the_bits_of_sin_and_cos() {
     }
     // Random bit patterns (every exponent, subnormals, huge arguments), and random angles
     // near pi/2, the hanging position.
-    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    let mut rng = Rng::new(1);
     for _ in 0..2_000_000 {
-        check(f64::from_bits(rng.next()));
-        let u = (rng.next() >> 11) as f64 / (1u64 << 53) as f64;
+        check(f64::from_bits(rng.next_u64()));
+        let u = rng.uniform();
         check(core::f64::consts::FRAC_PI_2 + 2.8 * (u - 0.5));
     }
     for x in [
@@ -83,10 +74,10 @@ fn sincos_gives_the_bits_of_sin_and_cos() {
 fn hangs_shortcut_gives_the_formulas_answer() {
     use crane_model::{hangs, MIN_HANG, SWING_STOP};
     let half_pi = core::f64::consts::FRAC_PI_2;
-    let mut rng = Rng(0x2545_F491_4F6C_DD1D);
+    let mut rng = Rng::new(2);
     let (mut in_box, mut out_of_domain) = (0usize, 0usize);
     for k in 0..2_000_000u32 {
-        let u = |r: &mut Rng| (r.next() >> 11) as f64 / (1u64 << 53) as f64;
+        let u = |r: &mut Rng| r.uniform();
         // alpha over (0, pi), beta over (-pi/2, pi/2), denser near the box edges.
         let (a, b) = if k % 2 == 0 {
             (

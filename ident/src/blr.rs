@@ -408,7 +408,7 @@ mod tests {
     #[test]
     fn posterior_recovers_a_polynomial_and_coefficients_convert_to_metres() {
         let truth = [1.23, 0.29, -1.95, 3.98, 5.02];
-        let f = |p: f64| truth.iter().rev().fold(0.0, |a, c| a * p + c);
+        let f = |p: f64| crane_model::friction::horner(&truth, p);
         let mut b = Blr::new(0.0, 0.505, 4, 3.0, 1e-8);
         for p in linspace(0.0, 0.505, 30) {
             b.add(p, f(p));

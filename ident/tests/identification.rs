@@ -12,12 +12,9 @@ use crane_ident::rig::{
 };
 use crane_ident::rng::Rng;
 use crane_ident::validate::validate_dataset;
+use crane_model::friction::dry;
 use crane_model::{Extensions, Params};
 use std::time::Instant;
-
-fn horner(c: &[f64], p: f64) -> f64 {
-    c.iter().rev().fold(0.0, |a, ci| a * p + ci).max(0.0)
-}
 
 fn rel(x: f64, t: f64) -> f64 {
     ((x - t) / t).abs()
@@ -39,7 +36,7 @@ fn curve_quality(fit: &DryFit, truth: &[f64; 5]) -> CurveQuality {
     let mut se = 0.0;
     let mut inside = [0usize; 2];
     for k in 0..n {
-        let t = horner(truth, c.position[k]);
+        let t = dry(truth, c.position[k]);
         se += (c.mean[k] - t).powi(2);
         inside[0] += (t >= c.lower[k] && t <= c.upper[k]) as usize;
         inside[1] += (t >= c.simultaneous_lower[k] && t <= c.simultaneous_upper[k]) as usize;
@@ -140,7 +137,7 @@ fn effect_hook_changes_the_plant_and_breakaway_probes_see_it() {
     );
     let fa = truth.x.gain * corrected_onset(&a.run, 0, res, d, m).unwrap().volts;
     let fb = truth.x.gain * corrected_onset(&b.run, 0, res, d, m).unwrap().volts;
-    let c = horner(&truth.x.dry_pos, 0.2);
+    let c = dry(&truth.x.dry_pos, 0.2);
     // the clean probe measures the friction (lag corrected), the biased one 0.5 N less
     assert!((fa - c).abs() < 0.01, "{fa} vs {c}");
     assert!((fa - fb - 0.5).abs() < 0.01, "{fa} {fb}");
@@ -294,9 +291,8 @@ fn synthetic_fit(active: bool, seed: u64, var: f64, truth: &[f64; 5], range: f64
     let mut rng = Rng::new(seed);
     let mut noise = Rng::new(seed ^ 0xABCD);
     let mut blr = Blr::new(0.0, range, opt.degree, opt.prior_std, var);
-    let mut measure = |p: f64| -> Result<(f64, f64), ()> {
-        Ok((horner(truth, p) + var.sqrt() * noise.normal(), p))
-    };
+    let mut measure =
+        |p: f64| -> Result<(f64, f64), ()> { Ok((dry(truth, p) + var.sqrt() * noise.normal(), p)) };
     if active {
         active_learning(&mut blr, &opt, &mut rng, &mut measure).unwrap();
     } else {
@@ -473,7 +469,7 @@ fn lag_corrected_breakaway_probes_are_unbiased() {
             let p = 0.005 + (range - 0.01) * (i as f64 + 0.37) / n as f64;
             let r = rig.breakaway(&Probe::new(axis, pos, p)).unwrap();
             let on = corrected_onset(&r.run, axis, res, d / k, m / d).unwrap();
-            let t = horner(&tc, on.position);
+            let t = dry(&tc, on.position);
             let e = k * on.volts.abs() - t;
             worst = worst.max(e.abs());
             bias += e / n as f64;

@@ -9,7 +9,8 @@
 //!   the PI step controller of Hairer & Wanner's DOPRI5 after an accepted step,
 //!   `h min(5, max(0.2, 0.9 err^(-0.17) err_prev^0.04))`, and `h max(0.2, 0.9 err^(-1/5))`
 //!   after a rejection (no growth right after one), and the 4th-order continuous extension of
-//!   MATLAB's `ntrp45` as dense output. The same pair as `tools/src/ode45.rs`, here on the
+//!   MATLAB's `ntrp45` as dense output ([`crate::dopri5`], also the tableau of
+//!   `tools/src/ode45.rs`), here on the
 //!   hybrid law: a stopped axis has
 //!   `qd = 0` and `qdd = 0` exactly in every stage, so it stays exactly where it is, and a
 //!   state with every drive axis stopped and the swing at rest has a zero error estimate:
@@ -40,7 +41,9 @@
 //! (`f64` only: offline use needs no `f32`).
 
 use crate::coeffs::Coeffs;
+use crate::dopri5::{dense_weights, A, B, BI, C, E};
 use crate::dynamics::{at_state, eval, Eval, Law, Singular};
+use crate::friction::horner;
 use crate::integrator::{limit_violated, stop_limit, stop_velocity, sweep, velocity_violated};
 use crate::mode::Mode;
 use crate::modes::{candidate, margin, resolve};
@@ -140,54 +143,6 @@ pub struct StepInfo {
 
 type Y = [f64; 10];
 
-const C: [f64; 7] = [0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0];
-const A: [[f64; 5]; 5] = [
-    [1.0 / 5.0, 0.0, 0.0, 0.0, 0.0],
-    [3.0 / 40.0, 9.0 / 40.0, 0.0, 0.0, 0.0],
-    [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0, 0.0, 0.0],
-    [
-        19372.0 / 6561.0,
-        -25360.0 / 2187.0,
-        64448.0 / 6561.0,
-        -212.0 / 729.0,
-        0.0,
-    ],
-    [
-        9017.0 / 3168.0,
-        -355.0 / 33.0,
-        46732.0 / 5247.0,
-        49.0 / 176.0,
-        -5103.0 / 18656.0,
-    ],
-];
-const B: [f64; 6] = [
-    35.0 / 384.0,
-    0.0,
-    500.0 / 1113.0,
-    125.0 / 192.0,
-    -2187.0 / 6784.0,
-    11.0 / 84.0,
-];
-// Error weights: 5th-order minus 4th-order weights (7 stages, FSAL).
-const E: [f64; 7] = [
-    71.0 / 57600.0,
-    0.0,
-    -71.0 / 16695.0,
-    71.0 / 1920.0,
-    -17253.0 / 339200.0,
-    22.0 / 525.0,
-    -1.0 / 40.0,
-];
-// Dense output (MATLAB ntrp45): b_i(th) = sum_j BI[i][j] th^(j+1).
-const BI: [[f64; 4]; 7] = [
-    [1.0, -183.0 / 64.0, 37.0 / 12.0, -145.0 / 128.0],
-    [0.0, 0.0, 0.0, 0.0],
-    [0.0, 1500.0 / 371.0, -1000.0 / 159.0, 1000.0 / 371.0],
-    [0.0, -125.0 / 32.0, 125.0 / 12.0, -375.0 / 64.0],
-    [0.0, 9477.0 / 3392.0, -729.0 / 106.0, 25515.0 / 6784.0],
-    [0.0, -11.0 / 7.0, 11.0 / 3.0, -55.0 / 28.0],
-    [0.0, 1.5, -4.0, 2.5],
-];
 /// The PI controller's `beta` (the exponent of the last accepted error).
 const PI_BETA: f64 = 0.04;
 /// `ln(1e-4)`: the floor of the previous error norm in the PI controller (DOPRI5's).
@@ -230,16 +185,6 @@ fn saturate(u: [f64; 3]) -> Result<[f64; 3], AdaptiveError> {
         *o = v.clamp(-lim, lim);
     }
     Ok(out)
-}
-
-/// Weights of the dense output at `th` in [0, 1].
-fn dense_weights(th: f64) -> [f64; 7] {
-    let p = [th, th * th, th * th * th, th * th * th * th];
-    let mut w = [0.0; 7];
-    for (wi, b) in w.iter_mut().zip(BI.iter()) {
-        *wi = b[0] * p[0] + b[1] * p[1] + b[2] * p[2] + b[3] * p[3];
-    }
-    w
 }
 
 /// The first point in `(lo, hi]` where an event function crosses into its violated side, to
@@ -381,11 +326,6 @@ impl Dense {
         }
         y
     }
-}
-
-/// A polynomial of degree 4 at `x`, coefficients lowest power first (Horner's scheme).
-fn horner(c: &[f64; 5], x: f64) -> f64 {
-    c[0] + x * (c[1] + x * (c[2] + x * (c[3] + x * c[4])))
 }
 
 /// The dense output of one accepted step as a polynomial in `th = (t - t0) / h`: cheap to

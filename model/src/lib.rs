@@ -35,6 +35,7 @@
 pub mod adaptive;
 pub mod coeffs;
 pub mod crane;
+pub mod dopri5;
 pub mod drive;
 pub mod dynamics;
 pub mod extensions;

@@ -5,43 +5,19 @@
 //! and uniformly in `[0.7, 1.3]` N (the nominal 1 N +- 30 %), likewise `Cbar_x`. Each
 //! simulation reports where the trolley ends and since when it has been stopped. With
 //! `Cbar+ != Cbar-` every slip is biased towards the weaker direction, so the trolley walks
-//! (ratchets) under the swinging payload: the spread of the end position is large. Draws come from a
-//! SplitMix64 generator seeded per simulation index, so results do not depend on the
-//! thread count or schedule.
+//! (ratchets) under the swinging payload: the spread of the end position is large. Draws come from
+//! the host's generator ([`crane_ident::rng::Rng`]) seeded per simulation index, so results do
+//! not depend on the thread count or schedule.
 
 use crate::adaptive_run::tolerances;
 use crate::cases::Case;
 use crate::error::{Error, Result};
+use crane_ident::rng::Rng;
 use crane_model::adaptive::Adaptive;
 use crane_model::{Config, Crane, FrictionLaw, Mode};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::time::Instant;
-
-/// SplitMix64: a small, good 64-bit generator (Steele, Lea & Flood 2014).
-#[derive(Clone, Copy, Debug)]
-pub struct SplitMix64(u64);
-
-impl SplitMix64 {
-    /// Generator from a seed.
-    pub fn new(seed: u64) -> Self {
-        SplitMix64(seed)
-    }
-
-    /// Next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `[0, 1)`.
-    pub fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-}
 
 /// One simulation's outcome.
 #[derive(Clone, Copy, Debug, Serialize)]
@@ -101,7 +77,7 @@ pub fn simulate(seed: u64, index: u64, duration: f64, h: f64) -> Result<Outcome>
 /// Simulation `index` of a batch with `seed`: `duration` seconds with `stepper`.
 pub fn simulate_with(seed: u64, index: u64, duration: f64, stepper: Stepper) -> Result<Outcome> {
     let case = Case::one();
-    let mut rng = SplitMix64::new(seed ^ index.wrapping_mul(0xD1B5_4A32_D192_ED03));
+    let mut rng = Rng::new(seed ^ index.wrapping_mul(0xD1B5_4A32_D192_ED03));
     let mut draw = || 0.7 + 0.6 * rng.uniform();
     let friction = [draw(), draw(), draw(), draw()];
     let mut p = case.params;

@@ -7,7 +7,10 @@
 //! `h min(5, max(0.2, 0.9 err^(-1/5)))` (no growth right after a rejection). Output on a
 //! fixed grid by the 4th-order continuous extension of MATLAB's `ntrp45`, so the samples cost
 //! no extra evaluation. The study uses one tolerance for every model: [`Options::default`],
-//! `rtol = 1e-6`, `atol = 1e-8`.
+//! `rtol = 1e-6`, `atol = 1e-8`. The tableau and the dense weights are the model's
+//! ([`crane_model::dopri5`]), also those of its hybrid adaptive integrator.
+
+use crane_model::dopri5::{dense_weights, A, B, C, E};
 
 /// Solver options.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -58,48 +61,6 @@ impl core::fmt::Display for Failure {
         }
     }
 }
-
-const C2: f64 = 1.0 / 5.0;
-const C3: f64 = 3.0 / 10.0;
-const C4: f64 = 4.0 / 5.0;
-const C5: f64 = 8.0 / 9.0;
-const A21: f64 = 1.0 / 5.0;
-const A31: f64 = 3.0 / 40.0;
-const A32: f64 = 9.0 / 40.0;
-const A41: f64 = 44.0 / 45.0;
-const A42: f64 = -56.0 / 15.0;
-const A43: f64 = 32.0 / 9.0;
-const A51: f64 = 19372.0 / 6561.0;
-const A52: f64 = -25360.0 / 2187.0;
-const A53: f64 = 64448.0 / 6561.0;
-const A54: f64 = -212.0 / 729.0;
-const A61: f64 = 9017.0 / 3168.0;
-const A62: f64 = -355.0 / 33.0;
-const A63: f64 = 46732.0 / 5247.0;
-const A64: f64 = 49.0 / 176.0;
-const A65: f64 = -5103.0 / 18656.0;
-const B1: f64 = 35.0 / 384.0;
-const B3: f64 = 500.0 / 1113.0;
-const B4: f64 = 125.0 / 192.0;
-const B5: f64 = -2187.0 / 6784.0;
-const B6: f64 = 11.0 / 84.0;
-// Error weights: 5th-order minus 4th-order weights.
-const E1: f64 = 71.0 / 57600.0;
-const E3: f64 = -71.0 / 16695.0;
-const E4: f64 = 71.0 / 1920.0;
-const E5: f64 = -17253.0 / 339200.0;
-const E6: f64 = 22.0 / 525.0;
-const E7: f64 = -1.0 / 40.0;
-// Dense output (MATLAB ntrp45): b_i(th) = sum_j BI[i][j] th^(j+1); row 2 is zero.
-const BI: [[f64; 4]; 7] = [
-    [1.0, -183.0 / 64.0, 37.0 / 12.0, -145.0 / 128.0],
-    [0.0, 0.0, 0.0, 0.0],
-    [0.0, 1500.0 / 371.0, -1000.0 / 159.0, 1000.0 / 371.0],
-    [0.0, -125.0 / 32.0, 125.0 / 12.0, -375.0 / 64.0],
-    [0.0, 9477.0 / 3392.0, -729.0 / 106.0, 25515.0 / 6784.0],
-    [0.0, -11.0 / 7.0, 11.0 / 3.0, -55.0 / 28.0],
-    [0.0, 1.5, -4.0, 2.5],
-];
 
 #[inline]
 fn comb<const N: usize>(y: &[f64; N], h: f64, terms: &[(f64, &[f64; N])]) -> [f64; N] {
@@ -185,31 +146,57 @@ pub fn integrate<const N: usize>(
         if h <= 16.0 * f64::EPSILON * t.abs().max(1.0) {
             return Err(Failure::StepTooSmall(t));
         }
-        let y2 = comb(&y, h, &[(A21, &k1)]);
-        let k2 = f(t + C2 * h, &y2).ok_or(Failure::Rhs(t))?;
-        let y3 = comb(&y, h, &[(A31, &k1), (A32, &k2)]);
-        let k3 = f(t + C3 * h, &y3).ok_or(Failure::Rhs(t))?;
-        let y4 = comb(&y, h, &[(A41, &k1), (A42, &k2), (A43, &k3)]);
-        let k4 = f(t + C4 * h, &y4).ok_or(Failure::Rhs(t))?;
-        let y5 = comb(&y, h, &[(A51, &k1), (A52, &k2), (A53, &k3), (A54, &k4)]);
-        let k5 = f(t + C5 * h, &y5).ok_or(Failure::Rhs(t))?;
+        let y2 = comb(&y, h, &[(A[0][0], &k1)]);
+        let k2 = f(t + C[1] * h, &y2).ok_or(Failure::Rhs(t))?;
+        let y3 = comb(&y, h, &[(A[1][0], &k1), (A[1][1], &k2)]);
+        let k3 = f(t + C[2] * h, &y3).ok_or(Failure::Rhs(t))?;
+        let y4 = comb(&y, h, &[(A[2][0], &k1), (A[2][1], &k2), (A[2][2], &k3)]);
+        let k4 = f(t + C[3] * h, &y4).ok_or(Failure::Rhs(t))?;
+        let y5 = comb(
+            &y,
+            h,
+            &[
+                (A[3][0], &k1),
+                (A[3][1], &k2),
+                (A[3][2], &k3),
+                (A[3][3], &k4),
+            ],
+        );
+        let k5 = f(t + C[4] * h, &y5).ok_or(Failure::Rhs(t))?;
         let y6 = comb(
             &y,
             h,
-            &[(A61, &k1), (A62, &k2), (A63, &k3), (A64, &k4), (A65, &k5)],
+            &[
+                (A[4][0], &k1),
+                (A[4][1], &k2),
+                (A[4][2], &k3),
+                (A[4][3], &k4),
+                (A[4][4], &k5),
+            ],
         );
         let k6 = f(t + h, &y6).ok_or(Failure::Rhs(t))?;
         let yn = comb(
             &y,
             h,
-            &[(B1, &k1), (B3, &k3), (B4, &k4), (B5, &k5), (B6, &k6)],
+            &[
+                (B[0], &k1),
+                (B[2], &k3),
+                (B[3], &k4),
+                (B[4], &k5),
+                (B[5], &k6),
+            ],
         );
         let k7 = f(t + h, &yn).ok_or(Failure::Rhs(t))?;
         st.evals += 6;
         let mut e = [0.0; N];
         for j in 0..N {
-            e[j] =
-                h * (E1 * k1[j] + E3 * k3[j] + E4 * k4[j] + E5 * k5[j] + E6 * k6[j] + E7 * k7[j]);
+            e[j] = h
+                * (E[0] * k1[j]
+                    + E[2] * k3[j]
+                    + E[3] * k4[j]
+                    + E[4] * k5[j]
+                    + E[5] * k6[j]
+                    + E[6] * k7[j]);
         }
         let err = rms_norm(&e, &y, &yn, opts);
         let accept = err <= 1.0; // false for NaN too
@@ -234,11 +221,7 @@ pub fn integrate<const N: usize>(
                 break;
             }
             let th = ((tk - t) / h).clamp(0.0, 1.0);
-            let p = [th, th * th, th * th * th, th * th * th * th];
-            let mut w = [0.0; 7];
-            for (i, wi) in w.iter_mut().enumerate() {
-                *wi = BI[i][0] * p[0] + BI[i][1] * p[1] + BI[i][2] * p[2] + BI[i][3] * p[3];
-            }
+            let w = dense_weights(th);
             let mut yk = y;
             for (j, v) in yk.iter_mut().enumerate() {
                 let mut s = 0.0;

@@ -52,6 +52,11 @@ impl Io for Board {
 }
 
 /// A small xorshift for the operator (its own, not the rig's).
+///
+/// Kept rather than drawn from the host's generator (`crane_ident::rng`): the operator's moves
+/// on every seed are what `twin/README.md`'s stranger table and its per-seed account (ready at
+/// 780-892 s and 2,623 s, seed 1's moves after the onset, seed 5's drift levels) describe; a
+/// new stream would void that account, not just its counts.
 struct Dice(u64);
 
 impl Dice {

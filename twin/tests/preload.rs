@@ -3,6 +3,7 @@
 //! only writes the preload register is shown to violate it (the test can fail).
 
 use core::cell::{Cell, RefCell};
+use crane_ident::rng::Rng;
 use crane_twin::hal::{HBridge, MotorDrive};
 use crane_twin::preload::{PreloadedTimer, ZeroNowChannel};
 use embedded_hal::digital::{ErrorType, OutputPin};
@@ -169,7 +170,7 @@ struct AsyncBridge {
     pins: [bool; 2],
     /// direction of the command being applied (set by the test)
     command_dir: Option<bool>,
-    rng: u64,
+    rng: Rng,
     updates: u32,
     reversals_under_load: u32,
 }
@@ -183,7 +184,7 @@ impl AsyncBridge {
             effective_dir: None,
             pins: [false; 2],
             command_dir: None,
-            rng: seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1,
+            rng: Rng::new(seed),
             updates: 0,
             reversals_under_load: 0,
         }
@@ -201,12 +202,9 @@ impl AsyncBridge {
         self.updates += 1;
         self.audit();
     }
-    /// An update event with probability 1/2 (xorshift).
+    /// An update event with probability 1/2.
     fn maybe_update(&mut self) {
-        self.rng ^= self.rng << 13;
-        self.rng ^= self.rng >> 7;
-        self.rng ^= self.rng << 17;
-        if self.rng & 1 == 1 {
+        if self.rng.below(2) == 1 {
             self.update_event();
         }
     }

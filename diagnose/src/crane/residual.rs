@@ -3,9 +3,9 @@
 //! the applied force, and the samples the force-domain fits may use marked.
 
 use super::{CUTOFF_HZ, DECIMATE, EXCLUDE_S, MIN_SPEED};
-use crate::fit::dry;
 use crane_ident::data::CraneRun;
 use crane_ident::signal::{butter, diff2_central, diff_central, Filter};
+use crane_model::friction::dry;
 use crane_model::Params;
 
 /// One run prepared for the force domain. Drives are indexed 0 X, 1 Y, 2 rope; positions

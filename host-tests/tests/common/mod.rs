@@ -1,5 +1,5 @@
 //! Helpers shared by the integration tests: building the model and the reference from the
-//! same inputs, mapping modes, input programs, a tiny deterministic PRNG.
+//! same inputs, mapping modes, input programs, the host's seeded generator.
 #![allow(dead_code, clippy::needless_range_loop)]
 
 use crane_model::{Config, Crane, Extensions, FrictionLaw, Mode, Params, State};
@@ -135,30 +135,8 @@ pub fn compare_output(step: usize, m: &Crane<f64>, r: &RefCrane) -> Option<Strin
     None
 }
 
-/// SplitMix64: a tiny, deterministic PRNG for long random input sequences.
-#[derive(Clone, Debug)]
-pub struct Rng(pub u64);
-
-impl Rng {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [0, 1).
-    pub fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-    /// Uniform in [a, b).
-    pub fn range(&mut self, a: f64, b: f64) -> f64 {
-        a + (b - a) * self.unit()
-    }
-    pub fn below(&mut self, n: u64) -> u64 {
-        self.next_u64() % n
-    }
-}
+/// The host's one seeded generator, for long random input sequences.
+pub use crane_ident::rng::Rng;
 
 /// One piece of an input program for one axis [V]. Saturation happens in the model.
 #[derive(Clone, Debug)]

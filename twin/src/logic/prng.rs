@@ -1,5 +1,10 @@
 //! A tiny deterministic integer PRNG (xorshift32) and exact integer-to-float conversions, so
 //! the firmware and the host generate the same input sequences bit for bit.
+//!
+//! It stays apart from the host's generator (`crane_ident::rng`, `rand_xoshiro`): it runs in
+//! the `no_std` firmware on the Cortex-M4 (32-bit state, no heap, no float), and the QEMU
+//! cross-checks compare the twin's scenario and rig inputs drawn here against the host's bit
+//! for bit.
 
 /// xorshift32 (Marsaglia). Never zero.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

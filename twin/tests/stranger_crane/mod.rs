@@ -10,11 +10,14 @@
 //! * exact sticking: three modes per drive, velocity zero crossings, end stops and
 //!   break-away guards are all located inside the substep (Illinois iteration, bounded);
 //! * end stops are plastic impacts (constraint impulse through the coupled mass matrix);
-//! * own RK4 on fixed substeps of at most 0.25 ms, own PRNG (xoshiro256**), own encoder noise.
+//! * own RK4 on fixed substeps of at most 0.25 ms, own encoder noise; its draws come from the
+//!   host's seeded generator (`crane_ident::rng`: xoshiro256** from `rand_xoshiro`, the same
+//!   stream as the plant's former own copy, so every seed's plant is as before).
 //!
 //! std only.
 #![allow(dead_code, clippy::needless_range_loop)]
 
+use crane_ident::rng::Rng;
 use std::f64::consts::PI;
 
 // ---------------------------------------------------------------------------------------------
@@ -286,45 +289,6 @@ impl Params {
             p.k[i] *= r.range(0.97, 1.03);
         }
         p
-    }
-}
-
-/// xoshiro256** seeded through splitmix64.
-#[derive(Clone, Debug)]
-struct Rng {
-    s: [u64; 4],
-}
-
-impl Rng {
-    fn new(seed: u64) -> Self {
-        let mut z = seed;
-        let mut s = [0u64; 4];
-        for w in s.iter_mut() {
-            z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut x = z;
-            x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            *w = x ^ (x >> 31);
-        }
-        Rng { s }
-    }
-    fn next_u64(&mut self) -> u64 {
-        let result = self.s[1].wrapping_mul(5).rotate_left(7).wrapping_mul(9);
-        let t = self.s[1] << 17;
-        self.s[2] ^= self.s[0];
-        self.s[3] ^= self.s[1];
-        self.s[1] ^= self.s[2];
-        self.s[0] ^= self.s[3];
-        self.s[2] ^= t;
-        self.s[3] = self.s[3].rotate_left(45);
-        result
-    }
-    /// Uniform in [0, 1).
-    fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.uniform()
     }
 }
 

@@ -1000,13 +1000,8 @@ mod tests {
 
     #[test]
     fn the_median_of_the_keys_is_the_total_cmp_median_bit_for_bit() {
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
+        let mut rng = crane_ident::rng::Rng::new(0x2545_f491_4f6c_dd1d);
+        let mut next = || rng.next_u64();
         let specials = [0.0f32, -0.0, 1.0, -1.0, f32::MIN_POSITIVE, -f32::MAX, 1e-3];
         for round in 0..4000 {
             let n = (next() % (BINS as u64 + 1)) as usize;
