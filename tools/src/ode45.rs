@@ -85,6 +85,45 @@ fn rms_norm<const N: usize>(e: &[f64; N], y0: &[f64; N], y1: &[f64; N], o: &Opti
     (s / N as f64).sqrt()
 }
 
+/// The first step [s] (Hairer, Norsett & Wanner, II.4): from the sizes of `y` and `k1 = y'`
+/// at `t`, and of `y'` one trial step on, at most `hmax`; one evaluation of `f`.
+fn initial_step<const N: usize>(
+    f: &mut impl FnMut(f64, &[f64; N]) -> Option<[f64; N]>,
+    t: f64,
+    y: &[f64; N],
+    k1: &[f64; N],
+    hmax: f64,
+    opts: &Options,
+) -> Result<f64, Failure> {
+    let (mut d0, mut d1) = (0.0, 0.0);
+    for j in 0..N {
+        let sc = opts.atol + opts.rtol * y[j].abs();
+        d0 += (y[j] / sc).powi(2);
+        d1 += (k1[j] / sc).powi(2);
+    }
+    let (d0, d1) = ((d0 / N as f64).sqrt(), (d1 / N as f64).sqrt());
+    let h0 = if d0 < 1e-5 || d1 < 1e-5 {
+        1e-6
+    } else {
+        0.01 * d0 / d1
+    };
+    let y1 = comb(y, h0, &[(1.0, k1)]);
+    let f1 = f(t + h0, &y1).ok_or(Failure::Rhs(t))?;
+    let mut d2 = 0.0;
+    for j in 0..N {
+        let sc = opts.atol + opts.rtol * y[j].abs();
+        d2 += ((f1[j] - k1[j]) / sc).powi(2);
+    }
+    let d2 = (d2 / N as f64).sqrt() / h0;
+    let m = d1.max(d2);
+    let h1 = if m <= 1e-15 {
+        (h0 * 1e-3).max(1e-6)
+    } else {
+        (0.01 / m).powf(0.2)
+    };
+    Ok((100.0 * h0).min(h1).min(hmax))
+}
+
 /// Integrates `y' = f(t, y)` from `t0` to `t0 + n dt`, calling `out(k, t_k, y(t_k))` for every
 /// grid time `t_k = t0 + k dt`, `k = 1..=n` (dense output).
 ///
@@ -105,37 +144,8 @@ pub fn integrate<const N: usize>(
     let mut k1 = f(t, &y).ok_or(Failure::Rhs(t))?;
     st.evals += 1;
     let hmax = opts.hmax.min((t_end - t0).abs()).max(f64::MIN_POSITIVE);
-    // Initial step (Hairer, Norsett & Wanner, II.4): from the size of y and y'.
-    let mut h = {
-        let (mut d0, mut d1) = (0.0, 0.0);
-        for j in 0..N {
-            let sc = opts.atol + opts.rtol * y[j].abs();
-            d0 += (y[j] / sc).powi(2);
-            d1 += (k1[j] / sc).powi(2);
-        }
-        let (d0, d1) = ((d0 / N as f64).sqrt(), (d1 / N as f64).sqrt());
-        let h0 = if d0 < 1e-5 || d1 < 1e-5 {
-            1e-6
-        } else {
-            0.01 * d0 / d1
-        };
-        let y1 = comb(&y, h0, &[(1.0, &k1)]);
-        let f1 = f(t + h0, &y1).ok_or(Failure::Rhs(t))?;
-        st.evals += 1;
-        let mut d2 = 0.0;
-        for j in 0..N {
-            let sc = opts.atol + opts.rtol * y[j].abs();
-            d2 += ((f1[j] - k1[j]) / sc).powi(2);
-        }
-        let d2 = (d2 / N as f64).sqrt() / h0;
-        let m = d1.max(d2);
-        let h1 = if m <= 1e-15 {
-            (h0 * 1e-3).max(1e-6)
-        } else {
-            (0.01 / m).powf(0.2)
-        };
-        (100.0 * h0).min(h1).min(hmax)
-    };
+    let mut h = initial_step(&mut f, t, &y, &k1, hmax, opts)?;
+    st.evals += 1;
     let mut next = 1usize;
     let mut rejected_last = false;
     while next <= n {
