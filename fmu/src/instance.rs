@@ -4,7 +4,7 @@
 //! Every failure is a [`Failure`]: the FMI status to return and the message to log.
 
 use crate::snapshot::{Sim, Snapshot};
-use crate::status::{Failure, Phase, Status};
+use crate::status::{Failure, Phase};
 use crate::variables::{self, Kind, LimitEnd, Settings, Slot, Variability, Variable, AXES};
 use crane_model::dynamics::eval;
 use crane_model::{
@@ -572,6 +572,7 @@ fn output_of(c: &Crane, s: &Settings, u: &[f64; 3], t: f64) -> Result<Output, Fa
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::status::Status;
 
     fn running() -> Instance {
         let mut i = Instance::new();
