@@ -144,7 +144,7 @@ fn json_and_plot_files_and_json_on_stdout() {
     // another control period scales the times
     let o = crane(&d, &["monitor", "run.log", "--json", "--period-s", "0.001"]);
     let r: Report = serde_json::from_slice(&o.stdout).expect("one JSON document");
-    assert!((r.sections[0].alarms[0].time_s - 21.372).abs() < 1e-9);
+    assert!((r.sections[0].alarms[0].time_s - 21.432).abs() < 1e-9);
     let o = crane(&d, &["monitor", "run.log", "--period-s", "2"]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("plausible range"), "{}", stderr(&o));
