@@ -1030,6 +1030,48 @@ mod tests {
         *v.select_nth_unstable_by(n / 2, f32::total_cmp).1
     }
 
+    /// A map over [0, 0.64] m (10 mm bins) whose bins 5..40 are judged, with passes that
+    /// scatter by 0.05 N, then one more move over `from..to` (bins, increasing) in which bins
+    /// 20 and 21 read 1 N more.
+    fn map_with_a_last_move(from: usize, to: usize) -> (SlidingMap, MapSettings) {
+        let s = MapSettings::default();
+        let mut m = SlidingMap::new(0.0, 0.64);
+        let x = |b: usize| (b as f32 + 0.5) * 0.01;
+        for pass in 0..40 {
+            let r = if pass % 2 == 0 { 0.05 } else { -0.05 };
+            for b in 5..40 {
+                for _ in 0..16 {
+                    m.add(x(b), 0.2, r, &s, true);
+                }
+            }
+            m.end_move();
+        }
+        for b in from..to {
+            let r = if b == 20 || b == 21 { 1.0 } else { 0.05 };
+            for _ in 0..16 {
+                m.add(x(b), 0.2, r, &s, true);
+            }
+        }
+        (m, s)
+    }
+
+    #[test]
+    fn a_move_that_ends_at_a_stretch_is_no_pass_over_it() {
+        let judge = |from, to| {
+            let (m, s) = map_with_a_last_move(from, to);
+            let pooled = m.view(30, &s).band;
+            local_pattern(&m, &s, 0.0, pooled, 4.5 * 4.5, 4)
+        };
+        // Crossed with both flanks (bins 16..19 and 23..26): a local change at 0.21 m.
+        let Judged::Local(l) = judge(10, 30) else {
+            panic!("{:?}", judge(10, 30));
+        };
+        assert!((l.position - 0.21).abs() < 0.006, "{l:?}");
+        // The move ends right after the stretch, or begins right before it: not judged.
+        assert_eq!(judge(10, 23), Judged::Unjudged);
+        assert_eq!(judge(19, 30), Judged::Unjudged);
+    }
+
     #[test]
     fn the_median_of_the_keys_is_the_total_cmp_median_bit_for_bit() {
         let mut state = 0x2545_f491_4f6c_dd1du64;
