@@ -42,3 +42,4 @@ pub mod study;
 pub mod tanh_run;
 pub mod timing;
 pub mod workprec;
+pub mod workprec_figure;

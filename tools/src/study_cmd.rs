@@ -3,7 +3,7 @@
 use anyhow::{bail, Result};
 use crane_tools::cases::Case;
 use crane_tools::output::Outputs;
-use crane_tools::{figures, montecarlo, study, workprec};
+use crane_tools::{figures, montecarlo, study, workprec_figure};
 use std::path::Path;
 
 /// `crane study`: both cases, the table (or JSON), the figures and `study.json` in `out`
@@ -38,7 +38,7 @@ pub fn study(out: &Path, json: bool, quick: bool, budget: f64, force: bool) -> R
             "{}: work-precision (wall time against velocity RMSE)",
             if name == "case1" { "Case 1" } else { "Case 2" }
         );
-        workprec::diagram(&p, &title, &r.work_precision, &r.levels, &mut outputs)?;
+        workprec_figure::diagram(&p, &title, &r.work_precision, &r.levels, &mut outputs)?;
         figs.push(p);
     }
     // the figures and study.json together, or none of them

@@ -19,16 +19,13 @@
 
 use crate::adaptive_run::{hybrid_adaptive, tolerances};
 use crate::cases::Case;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::numfmt::fmt_g;
 use crate::ode45;
-use crate::output::Outputs;
 use crate::reference::{self, Trajectory};
 use crate::tanh_run::{tanh_name, tanh_ode45};
 use crate::timing::time_best;
-use plotters::prelude::*;
 use serde::Serialize;
-use std::path::Path;
 
 /// Which integrator and model a point belongs to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -321,155 +318,4 @@ pub fn table(name: &str, levels: &[Level]) -> String {
         ));
     }
     s
-}
-
-type Dyn = Box<dyn std::error::Error>;
-
-/// Draws the work-precision diagram (time against error, log-log) of one case as SVG into
-/// `path` (staged in `outputs`, published by its commit).
-pub fn diagram(
-    path: &Path,
-    title: &str,
-    pts: &[Point],
-    levels: &[Level],
-    outputs: &mut Outputs,
-) -> Result<()> {
-    let mut svg = String::new();
-    draw(&mut svg, title, pts, levels).map_err(|e| Error::Plot {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    })?;
-    outputs.stage(path, svg)?;
-    Ok(())
-}
-
-fn draw(
-    svg: &mut String,
-    title: &str,
-    pts: &[Point],
-    levels: &[Level],
-) -> std::result::Result<(), Dyn> {
-    let ok: Vec<&Point> = pts
-        .iter()
-        .filter(|p| p.rmse.is_finite() && p.rmse > 0.0 && p.time_s > 0.0)
-        .collect();
-    let (mut elo, mut ehi, mut tlo, mut thi) = (1e-9f64, 1e-2f64, f64::INFINITY, 0.0f64);
-    for p in &ok {
-        elo = elo.min(p.rmse);
-        ehi = ehi.max(p.rmse);
-        tlo = tlo.min(p.time_s);
-        thi = thi.max(p.time_s);
-    }
-    let (elo, ehi) = (elo / 2.0, ehi * 2.0);
-    let (tlo, thi) = (tlo / 2.0, thi * 2.0);
-    let root = SVGBackend::with_string(svg, (1000, 750)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let mut ch = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 20))
-        .margin(12)
-        .x_label_area_size(45)
-        .y_label_area_size(70)
-        .build_cartesian_2d((elo..ehi).log_scale(), (tlo..thi).log_scale())?;
-    ch.configure_mesh()
-        .x_desc("RMSE of the compared velocity against the 10 us reference [m/s]")
-        .y_desc("wall time of the run [s]")
-        .x_label_formatter(&|v| format!("{v:.0e}"))
-        .y_label_formatter(&|v| format!("{v:.0e}"))
-        .draw()?;
-    // (label, colour, points, bold)
-    type Series = (String, RGBColor, Vec<(f64, f64)>, bool);
-    let mut series: Vec<Series> = Vec::new();
-    let line = |m: Method, g: Option<f64>| -> Vec<(f64, f64)> {
-        let mut v: Vec<(f64, f64)> = ok
-            .iter()
-            .filter(|p| p.method == m && p.gamma == g)
-            .map(|p| (p.rmse, p.time_s))
-            .collect();
-        v.sort_by(|a, b| a.0.total_cmp(&b.0));
-        v
-    };
-    series.push((
-        "hybrid fixed step (200 ms .. 0.05 ms)".into(),
-        RGBColor(0, 0, 0),
-        line(Method::HybridFixed, None),
-        true,
-    ));
-    series.push((
-        "hybrid adaptive DP45 (rtol 1e-3 .. 1e-10)".into(),
-        RGBColor(200, 0, 0),
-        line(Method::HybridAdaptive, None),
-        true,
-    ));
-    let blues = [
-        RGBColor(120, 170, 255),
-        RGBColor(70, 120, 230),
-        RGBColor(30, 70, 200),
-        RGBColor(10, 40, 150),
-        RGBColor(0, 10, 90),
-    ];
-    let greens = [
-        RGBColor(120, 220, 120),
-        RGBColor(60, 180, 60),
-        RGBColor(20, 140, 20),
-        RGBColor(0, 100, 0),
-        RGBColor(0, 60, 0),
-    ];
-    for (k, &g) in TANH_GAMMAS.iter().enumerate() {
-        series.push((
-            format!("{} DP45", tanh_name(g)),
-            blues[k % 5],
-            line(Method::TanhDp45, Some(g)),
-            false,
-        ));
-        series.push((
-            format!("{} Rosenbrock 2(3)", tanh_name(g)),
-            greens[k % 5],
-            line(Method::TanhRosenbrock, Some(g)),
-            false,
-        ));
-        // BDF: oranges, light (gamma 1e2) to dark (1e6).
-        series.push((
-            format!("{} BDF", tanh_name(g)),
-            RGBColor(255, 190 - 35 * k as u8, 60 - 12 * k as u8),
-            line(Method::TanhBdf, Some(g)),
-            false,
-        ));
-    }
-    for (name, col, v, bold) in series {
-        if v.is_empty() {
-            continue;
-        }
-        let w = if bold { 3 } else { 1 };
-        ch.draw_series(LineSeries::new(v.clone(), col.stroke_width(w)))?
-            .label(name)
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], col.stroke_width(3)));
-        ch.draw_series(v.iter().map(|&(x, y)| Circle::new((x, y), 3, col.filled())))?;
-    }
-    // The comparison: the speed-up at each level where both reach it, and by how much it
-    // misses the goal where it does (red; met: green).
-    for l in levels {
-        if let (Some(h), Some(s)) = (&l.hybrid, l.speedup) {
-            let (text, col) = if s >= GOAL {
-                (format!("{s:.1}x"), RGBColor(0, 130, 0))
-            } else {
-                (
-                    format!("{s:.1}x (goal {GOAL:.0}x: missed by {:.2}x)", GOAL / s),
-                    RGBColor(200, 0, 0),
-                )
-            };
-            ch.draw_series(std::iter::once(Text::new(
-                text,
-                (l.level, h.time_s / 1.6),
-                ("sans-serif", 13).into_font().color(&col),
-            )))?;
-        }
-    }
-    ch.configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 12))
-        .draw()?;
-    root.present()?;
-    Ok(())
 }

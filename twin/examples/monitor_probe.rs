@@ -107,7 +107,10 @@ thread_local! {
     static TRACE: std::cell::RefCell<String> = const { std::cell::RefCell::new(String::new()) };
 }
 
-fn main() {
+/// The run and the monitor's settings from the command line (`FAULT SEED DURATION`) and, with
+/// `PROBE_CHECK`, the firmware's check run with `PROBE_AMP`, `PROBE_DUR`, `PROBE_JUDGED` and
+/// `PROBE_WARM` overrides.
+fn run_and_settings() -> (Run, Settings) {
     let args: Vec<String> = std::env::args().collect();
     let fault = match args.get(1).map(String::as_str).unwrap_or("clean") {
         "dry" => Fault::DryFriction { factor: 1.3 },
@@ -123,8 +126,6 @@ fn main() {
     };
     let seed: u32 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(1);
     let duration: f64 = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(3600.0);
-    let every: u64 = 250;
-    let keep = 24;
     let run = Run {
         fault,
         onset: 600.0,
@@ -158,6 +159,13 @@ fn main() {
             settings.map.warm = j as u16;
         }
     }
+    (run, settings)
+}
+
+fn main() {
+    let (run, settings) = run_and_settings();
+    let every: u64 = 250;
+    let keep = 24;
     let mut hist: VecDeque<(f64, Monitor)> = VecDeque::new();
     let mut k = 0u64;
     let mut acc = Acc {
