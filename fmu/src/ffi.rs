@@ -9,7 +9,9 @@
 //! - its body runs inside [`guard`] (`std::panic::catch_unwind`): a panic becomes
 //!   `fmi2Fatal` (the instance is marked failed), it never unwinds into the importer; the
 //!   functions that take an instance are written with the one macro `entry!`, which holds
-//!   the call of `guard` and its `// SAFETY:` comment;
+//!   the call of `guard` and its `// SAFETY:` comment (directly, or through `lifecycle!` and
+//!   `get_set!`, which each write their functions' `# Safety` contract and the `// SAFETY:`
+//!   reasoning of their own unsafe block once);
 //! - null pointers are checked before use (`fmi2Error`);
 //! - the logic lives in safe Rust ([`Instance`]); this file only converts pointers to slices
 //!   and results to statuses, logging every failure through the importer's logger.
@@ -370,55 +372,59 @@ entry! {
     }
 }
 
-entry! {
+/// Defines `fmi2*` entry points that pass their arguments to one [`Instance`] method
+/// returning `Result<(), Failure>` and report its result (`fmi2OK`, or the failure's status
+/// with its message logged), through `entry!`. Each item is a doc comment and
+/// `fn NAME(ARG: TYPE, ...) => METHOD(ARG, ...);`. Every function defined here gets the
+/// `# Safety` section written below ([`guard`]'s contract); its only unsafe block is the one
+/// in `entry!`, whose `// SAFETY:` comment rests on that contract.
+macro_rules! lifecycle {
+    ($(
+        $(#[$attr:meta])*
+        fn $name:ident($($arg:ident: $ty:ty),* $(,)?) => $method:ident($($pass:ident),*);
+    )*) => {$(
+        entry! {
+            $(#[$attr])*
+            ///
+            /// # Safety
+            /// `c` is null or from [`fmi2Instantiate`] and not yet freed, used by one thread at
+            /// a time (`guard`'s contract).
+            fn $name($($arg: $ty),*) |fmu| {
+                let r = fmu.instance.$method($($pass),*);
+                fmu.report(r)
+            }
+        }
+    )*};
+}
+
+// Safety: the `# Safety` section and the `// SAFETY:` reasoning of these functions are
+// written once, at `lifecycle!` and `entry!`.
+lifecycle! {
     /// `fmi2SetupExperiment`: the start time; tolerance and stop time are not used.
-    ///
-    /// # Safety
-    /// See [`guard`].
     fn fmi2SetupExperiment(
         _tolerance_defined: fmi2Boolean,
         _tolerance: fmi2Real,
         start_time: fmi2Real,
         _stop_time_defined: fmi2Boolean,
         _stop_time: fmi2Real,
-    ) |fmu| {
-        let r = fmu.instance.setup_experiment(start_time);
-        fmu.report(r)
-    }
-}
+    ) => setup_experiment(start_time);
 
-entry! {
     /// `fmi2EnterInitializationMode`.
-    ///
-    /// # Safety
-    /// See [`guard`].
-    fn fmi2EnterInitializationMode() |fmu| {
-        let r = fmu.instance.enter_initialization();
-        fmu.report(r)
-    }
-}
+    fn fmi2EnterInitializationMode() => enter_initialization();
 
-entry! {
     /// `fmi2ExitInitializationMode`: validates parameters and initial state (the model's error
     /// text goes to the logger).
-    ///
-    /// # Safety
-    /// See [`guard`].
-    fn fmi2ExitInitializationMode() |fmu| {
-        let r = fmu.instance.exit_initialization();
-        fmu.report(r)
-    }
-}
+    fn fmi2ExitInitializationMode() => exit_initialization();
 
-entry! {
     /// `fmi2Terminate`.
-    ///
-    /// # Safety
-    /// See [`guard`].
-    fn fmi2Terminate() |fmu| {
-        let r = fmu.instance.terminate();
-        fmu.report(r)
-    }
+    fn fmi2Terminate() => terminate();
+
+    /// `fmi2DoStep`: `communicationStepSize` must be a whole multiple of `config.h`.
+    fn fmi2DoStep(
+        current_communication_point: fmi2Real,
+        communication_step_size: fmi2Real,
+        _no_set_fmu_state_prior: fmi2Boolean,
+    ) => do_step(current_communication_point, communication_step_size);
 }
 
 entry! {
@@ -432,137 +438,73 @@ entry! {
     }
 }
 
-entry! {
+/// Defines the `fmi2Get*` and `fmi2Set*` entry points, `(c, vr, nvr, value)` with `vr:
+/// *const fmi2ValueReference`, `nvr: usize` and `value: *mut T` (get) or `*const T` (set),
+/// through `entry!`. Each item is a doc comment and `fn NAME(get T) => ACTION;` or
+/// `fn NAME(set T) => ACTION;`, where `ACTION` is an [`Instance`] method `(vr, values)` whose
+/// result is reported, or a string `"Kind"`: a type this FMU has no variables of
+/// ([`no_variable_of`]). A null `vr` or `value` while `nvr > 0` is `fmi2Error`, logged as
+/// "NAME: null pointer argument"; `nvr == 0` reads and writes nothing.
+///
+/// Every function defined here gets the `# Safety` section written below; the one unsafe
+/// block written here (the two slices) rests on it, and the call of [`guard`] on `entry!`'s.
+macro_rules! get_set {
+    ($($(#[$attr:meta])* fn $name:ident($dir:ident $ty:ty) => $action:tt;)*) => {
+        $(get_set!(@$dir $(#[$attr])* $name $ty, $action);)*
+    };
+    (@get $(#[$attr:meta])* $name:ident $ty:ty, $action:tt) => {
+        get_set!(@entry $(#[$attr])* $name *mut $ty, slice_mut, $action);
+    };
+    (@set $(#[$attr:meta])* $name:ident $ty:ty, $action:tt) => {
+        get_set!(@entry $(#[$attr])* $name *const $ty, slice, $action);
+    };
+    (@entry $(#[$attr:meta])* $name:ident $ptr:ty, $slice:ident, $action:tt) => {
+        entry! {
+            $(#[$attr])*
+            ///
+            /// # Safety
+            /// `c` is null or from [`fmi2Instantiate`] and not yet freed, used by one thread at
+            /// a time (`guard`'s contract); `vr` and `value` are null or valid for `nvr` elements.
+            fn $name(vr: *const fmi2ValueReference, nvr: usize, value: $ptr) |fmu| {
+                // SAFETY: null or valid for `nvr` elements per this function's contract
+                // (above); `slice` and `slice_mut` check for null before use.
+                let (Some(vr), Some(value)) = (unsafe { (slice(vr, nvr), $slice(value, nvr)) })
+                else {
+                    return null_argument(fmu, stringify!($name));
+                };
+                get_set!(@do fmu, vr, value, $action)
+            }
+        }
+    };
+    (@do $fmu:ident, $vr:ident, $value:ident, $method:ident) => {{
+        let r = $fmu.instance.$method($vr, $value);
+        $fmu.report(r)
+    }};
+    (@do $fmu:ident, $vr:ident, $value:ident, $kind:literal) => {{
+        let _ = $value;
+        no_variable_of($fmu, $kind, $vr)
+    }};
+}
+
+// Safety: the `# Safety` section and the `// SAFETY:` reasoning of these functions are
+// written once, at `get_set!` and `entry!`.
+get_set! {
     /// `fmi2GetReal`.
-    ///
-    /// # Safety
-    /// See [`guard`]; `vr` and `value` are null or valid for `nvr` elements.
-    fn fmi2GetReal(vr: *const fmi2ValueReference, nvr: usize, value: *mut fmi2Real) |fmu| {
-        // SAFETY: null or valid for `nvr` elements per this function's contract.
-        let (Some(vr), Some(out)) = (unsafe { (slice(vr, nvr), slice_mut(value, nvr)) }) else {
-            return null_argument(fmu, "fmi2GetReal");
-        };
-        let r = fmu.instance.get_real(vr, out);
-        fmu.report(r)
-    }
-}
-
-entry! {
+    fn fmi2GetReal(get fmi2Real) => get_real;
     /// `fmi2GetInteger`.
-    ///
-    /// # Safety
-    /// See [`fmi2GetReal`].
-    fn fmi2GetInteger(vr: *const fmi2ValueReference, nvr: usize, value: *mut fmi2Integer) |fmu| {
-        // SAFETY: null or valid for `nvr` elements per this function's contract.
-        let (Some(vr), Some(out)) = (unsafe { (slice(vr, nvr), slice_mut(value, nvr)) }) else {
-            return null_argument(fmu, "fmi2GetInteger");
-        };
-        let r = fmu.instance.get_integer(vr, out);
-        fmu.report(r)
-    }
-}
-
-entry! {
+    fn fmi2GetInteger(get fmi2Integer) => get_integer;
     /// `fmi2GetBoolean`: the FMU has no Boolean variables, so any value reference is an error.
-    ///
-    /// # Safety
-    /// See [`fmi2GetReal`].
-    fn fmi2GetBoolean(vr: *const fmi2ValueReference, nvr: usize, value: *mut fmi2Boolean) |fmu| {
-        // SAFETY: null or valid for `nvr` elements per this function's contract.
-        let (Some(vr), Some(_)) = (unsafe { (slice(vr, nvr), slice_mut(value, nvr)) }) else {
-            return null_argument(fmu, "fmi2GetBoolean");
-        };
-        no_variable_of(fmu, "Boolean", vr)
-    }
-}
-
-entry! {
+    fn fmi2GetBoolean(get fmi2Boolean) => "Boolean";
     /// `fmi2GetString`: no String variables (any value reference is an error).
-    ///
-    /// # Safety
-    /// See [`fmi2GetReal`].
-    fn fmi2GetString(vr: *const fmi2ValueReference, nvr: usize, value: *mut fmi2String) |fmu| {
-        // SAFETY: null or valid for `nvr` elements per this function's contract.
-        let (Some(vr), Some(_)) = (unsafe { (slice(vr, nvr), slice_mut(value, nvr)) }) else {
-            return null_argument(fmu, "fmi2GetString");
-        };
-        no_variable_of(fmu, "String", vr)
-    }
-}
-
-entry! {
+    fn fmi2GetString(get fmi2String) => "String";
     /// `fmi2SetReal`: inputs and parameters (see `Instance::set_real`).
-    ///
-    /// # Safety
-    /// See [`guard`]; `vr` and `value` are null or valid for `nvr` elements.
-    fn fmi2SetReal(vr: *const fmi2ValueReference, nvr: usize, value: *const fmi2Real) |fmu| {
-        // SAFETY: null or valid for `nvr` elements per this function's contract.
-        let (Some(vr), Some(v)) = (unsafe { (slice(vr, nvr), slice(value, nvr)) }) else {
-            return null_argument(fmu, "fmi2SetReal");
-        };
-        let r = fmu.instance.set_real(vr, v);
-        fmu.report(r)
-    }
-}
-
-entry! {
+    fn fmi2SetReal(set fmi2Real) => set_real;
     /// `fmi2SetInteger`: the segment budget and the friction law.
-    ///
-    /// # Safety
-    /// See [`fmi2SetReal`].
-    fn fmi2SetInteger(vr: *const fmi2ValueReference, nvr: usize, value: *const fmi2Integer) |fmu| {
-        // SAFETY: null or valid for `nvr` elements per this function's contract.
-        let (Some(vr), Some(v)) = (unsafe { (slice(vr, nvr), slice(value, nvr)) }) else {
-            return null_argument(fmu, "fmi2SetInteger");
-        };
-        let r = fmu.instance.set_integer(vr, v);
-        fmu.report(r)
-    }
-}
-
-entry! {
+    fn fmi2SetInteger(set fmi2Integer) => set_integer;
     /// `fmi2SetBoolean`: no Boolean variables (any value reference is an error).
-    ///
-    /// # Safety
-    /// See [`fmi2SetReal`].
-    fn fmi2SetBoolean(vr: *const fmi2ValueReference, nvr: usize, value: *const fmi2Boolean) |fmu| {
-        // SAFETY: null or valid for `nvr` elements per this function's contract.
-        let (Some(vr), Some(_)) = (unsafe { (slice(vr, nvr), slice(value, nvr)) }) else {
-            return null_argument(fmu, "fmi2SetBoolean");
-        };
-        no_variable_of(fmu, "Boolean", vr)
-    }
-}
-
-entry! {
+    fn fmi2SetBoolean(set fmi2Boolean) => "Boolean";
     /// `fmi2SetString`: no String variables (any value reference is an error).
-    ///
-    /// # Safety
-    /// See [`fmi2SetReal`].
-    fn fmi2SetString(vr: *const fmi2ValueReference, nvr: usize, value: *const fmi2String) |fmu| {
-        // SAFETY: null or valid for `nvr` elements per this function's contract.
-        let (Some(vr), Some(_)) = (unsafe { (slice(vr, nvr), slice(value, nvr)) }) else {
-            return null_argument(fmu, "fmi2SetString");
-        };
-        no_variable_of(fmu, "String", vr)
-    }
-}
-
-entry! {
-    /// `fmi2DoStep`: `communicationStepSize` must be a whole multiple of `config.h`.
-    ///
-    /// # Safety
-    /// See [`guard`].
-    fn fmi2DoStep(
-        current_communication_point: fmi2Real,
-        communication_step_size: fmi2Real,
-        _no_set_fmu_state_prior: fmi2Boolean,
-    ) |fmu| {
-        let r = fmu
-            .instance
-            .do_step(current_communication_point, communication_step_size);
-        fmu.report(r)
-    }
+    fn fmi2SetString(set fmi2String) => "String";
 }
 
 entry! {
