@@ -7,7 +7,7 @@
 //!
 //! `cargo run --release -p crane-fmu --example case1`
 
-use crane_fmu::variables::{param, PARAMS};
+use crane_fmu::variables::params;
 use crane_model::{Config, Crane, State};
 use crane_tools::cases::Case;
 use std::time::Instant;
@@ -35,10 +35,8 @@ fn main() {
         last = states.last().copied();
     }
     let s = last.unwrap();
-    let mut values: Vec<String> = PARAMS
-        .iter()
-        .enumerate()
-        .map(|(i, (name, _, _))| format!("\"{name}\": {:?}", param(&case.params, i).unwrap()))
+    let mut values: Vec<String> = params()
+        .map(|f| format!("\"{}\": {:?}", f.name, (f.get)(&case.params)))
         .collect();
     for i in 0..5 {
         values.push(format!("\"state.q[{i}]\": {:?}", case.init.q[i]));

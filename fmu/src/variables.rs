@@ -4,9 +4,14 @@
 //! Names of parameters are the model's own field paths (`payload_mass`, `x.viscous_pos`,
 //! `rope.dry_neg[0]`, `config.h`, `state.q[3]`), so a validation error of the model
 //! (`crane_model::Error::field`) names the FMU variable to fix. Names follow FMI 2.0's
-//! `structured` naming convention.
+//! `structured` naming convention. The model parameters' names, units, descriptions and
+//! ranges are the model's table ([`crane_model::params::PARAM_FIELDS`]); this module adds
+//! what is the FMU's own: their order, value references, causality and variability.
 
-use crane_model::{AxisParams, Params, State};
+use crane_model::params::{ParamField, Rule, PARAM_FIELDS};
+use crane_model::{Axis, Params, State};
+
+pub use crane_model::params::LimitEnd;
 
 /// FMI 2.0 causality of a variable.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -46,7 +51,7 @@ pub enum Kind {
 pub enum Slot {
     /// Input voltage of axis 0 (X), 1 (Y), 2 (rope) [V].
     Input(usize),
-    /// Model parameter number `i` in [`PARAMS`] order.
+    /// Model parameter number `i` in [`params`] order.
     Param(usize),
     /// The model's fixed step `h` [s].
     Step,
@@ -150,48 +155,32 @@ impl Range {
     }
 }
 
-/// Which end of a drive axis' travel a parameter is (`x.min`, `rope.max`...).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum LimitEnd {
-    /// The lower position limit `min` [m].
-    Min,
-    /// The upper position limit `max` [m].
-    Max,
-}
-
 /// Names of the drive axes as the parameter names spell them (X, Y, rope).
-pub const AXES: [&str; 3] = ["x", "y", "rope"];
+pub const AXES: [&str; 3] = [Axis::X.name(), Axis::Y.name(), Axis::Rope.name()];
 
-/// For model parameter `i` ([`PARAMS`] order) that is a position limit: its axis (0 X, 1 Y,
+/// For model parameter `i` ([`params`] order) that is a position limit: its axis (0 X, 1 Y,
 /// 2 rope) and end.
 pub fn limit_of(i: usize) -> Option<(usize, LimitEnd)> {
-    let axis = i.checked_sub(6)? / 16;
-    if axis >= 3 {
-        return None;
-    }
-    match (i - 6) % 16 {
-        14 => Some((axis, LimitEnd::Min)),
-        15 => Some((axis, LimitEnd::Max)),
-        _ => None,
-    }
+    let f = param_field(i)?;
+    Some((f.axis?.index(), f.limit?))
 }
 
-/// The range `crane_model::Params::validate` checks model parameter `i` ([`PARAMS`] order)
-/// against, taken alone: masses `payload_mass`, `trolley_mass` and the gains `> 0`; the other
-/// masses, gravity, inertias, viscous and swing damping coefficients `>= 0`; `rope.min > 0`;
-/// polynomial coefficients and the other limits any finite value (`min < max` of one axis
-/// is a condition on the pair, checked at `fmi2ExitInitializationMode`).
+/// The range `crane_model::Params::validate` checks model parameter `i` ([`params`] order)
+/// against, taken alone (its [`ParamField::rule`]): masses `payload_mass`, `trolley_mass` and
+/// the gains `> 0`; the other masses, gravity, inertias, viscous and swing damping
+/// coefficients `>= 0`; `rope.min > 0`; polynomial coefficients and the other limits any
+/// finite value (`min < max` of one axis is a condition on the pair, checked at
+/// `fmi2ExitInitializationMode`).
 pub fn param_range(i: usize) -> Range {
-    match i {
-        0 | 1 => Range::POSITIVE,
-        2..=5 => Range::NON_NEGATIVE,
-        6..=53 => match (i - 6) % 16 {
-            0 | 2 | 3 => Range::NON_NEGATIVE,
-            1 => Range::POSITIVE,
-            14 if i == 38 + 14 => Range::POSITIVE,
-            _ => Range::ANY,
-        },
-        _ => Range::ANY,
+    param_field(i).map_or(Range::ANY, |f| rule_range(f.rule))
+}
+
+/// The declared range of a parameter with model rule `rule`.
+fn rule_range(rule: Rule) -> Range {
+    match rule {
+        Rule::Finite => Range::ANY,
+        Rule::NonNegative => Range::NON_NEGATIVE,
+        Rule::Positive => Range::POSITIVE,
     }
 }
 
@@ -218,200 +207,31 @@ pub const UNITS: &[(&str, [i8; 5])] = &[
     ("1", [0, 0, 0, 0, 0]),
 ];
 
-/// Number of model parameters (fields of [`Params`]).
-pub const N_PARAMS: usize = 6 + 3 * 16;
+/// Number of model parameters (the numbers of [`Params`]).
+pub const N_PARAMS: usize = crane_model::params::N_PARAMS;
 
-/// Model parameters in [`Slot::Param`] order: `(name, unit, description)`.
-pub const PARAMS: [(&str, &str, &str); N_PARAMS] = {
-    macro_rules! axis {
-        ($a:literal, $what:literal) => {
-            [
-                (
-                    concat!($a, ".inertia"),
-                    "kg",
-                    concat!("reflected motor inertia Jbar of ", $what, " (>= 0)"),
-                ),
-                (
-                    concat!($a, ".gain"),
-                    "N/V",
-                    concat!("motor gain K of ", $what, ": drive force K u (> 0)"),
-                ),
-                (
-                    concat!($a, ".viscous_pos"),
-                    "N.s/m",
-                    concat!("viscous coefficient Dbar+ of ", $what, " (>= 0)"),
-                ),
-                (
-                    concat!($a, ".viscous_neg"),
-                    "N.s/m",
-                    concat!("viscous coefficient Dbar- of ", $what, " (>= 0)"),
-                ),
-                (
-                    concat!($a, ".dry_pos[0]"),
-                    "N",
-                    concat!("dry friction Cbar+(p) of ", $what, ", coefficient c0"),
-                ),
-                (
-                    concat!($a, ".dry_pos[1]"),
-                    "N/m",
-                    concat!(
-                        "dry friction Cbar+(p) of ",
-                        $what,
-                        ", coefficient c1 (of p)"
-                    ),
-                ),
-                (
-                    concat!($a, ".dry_pos[2]"),
-                    "N/m2",
-                    concat!(
-                        "dry friction Cbar+(p) of ",
-                        $what,
-                        ", coefficient c2 (of p^2)"
-                    ),
-                ),
-                (
-                    concat!($a, ".dry_pos[3]"),
-                    "N/m3",
-                    concat!(
-                        "dry friction Cbar+(p) of ",
-                        $what,
-                        ", coefficient c3 (of p^3)"
-                    ),
-                ),
-                (
-                    concat!($a, ".dry_pos[4]"),
-                    "N/m4",
-                    concat!(
-                        "dry friction Cbar+(p) of ",
-                        $what,
-                        ", coefficient c4 (of p^4)"
-                    ),
-                ),
-                (
-                    concat!($a, ".dry_neg[0]"),
-                    "N",
-                    concat!("dry friction Cbar-(p) of ", $what, ", coefficient c0"),
-                ),
-                (
-                    concat!($a, ".dry_neg[1]"),
-                    "N/m",
-                    concat!(
-                        "dry friction Cbar-(p) of ",
-                        $what,
-                        ", coefficient c1 (of p)"
-                    ),
-                ),
-                (
-                    concat!($a, ".dry_neg[2]"),
-                    "N/m2",
-                    concat!(
-                        "dry friction Cbar-(p) of ",
-                        $what,
-                        ", coefficient c2 (of p^2)"
-                    ),
-                ),
-                (
-                    concat!($a, ".dry_neg[3]"),
-                    "N/m3",
-                    concat!(
-                        "dry friction Cbar-(p) of ",
-                        $what,
-                        ", coefficient c3 (of p^3)"
-                    ),
-                ),
-                (
-                    concat!($a, ".dry_neg[4]"),
-                    "N/m4",
-                    concat!(
-                        "dry friction Cbar-(p) of ",
-                        $what,
-                        ", coefficient c4 (of p^4)"
-                    ),
-                ),
-                (
-                    concat!($a, ".min"),
-                    "m",
-                    concat!("lower position limit of ", $what),
-                ),
-                (
-                    concat!($a, ".max"),
-                    "m",
-                    concat!("upper position limit of ", $what, " (> min)"),
-                ),
-            ]
-        };
-    }
-    let head = [
-        ("payload_mass", "kg", "payload mass m_p (> 0)"),
-        ("trolley_mass", "kg", "trolley mass m_t (> 0)"),
-        ("rail_mass", "kg", "rail mass m_r (>= 0)"),
-        ("gravity", "m/s2", "gravity g (>= 0)"),
-        ("damping_alpha", "kg.m2/s", "swing damping D_alpha (>= 0)"),
-        ("damping_beta", "kg.m2/s", "swing damping D_beta (>= 0)"),
-    ];
-    let x = axis!("x", "the X axis (rail)");
-    let y = axis!("y", "the Y axis (trolley)");
-    let l = axis!("rope", "the rope axis (positive lowers the payload)");
-    let mut out = [("", "", ""); N_PARAMS];
-    let mut i = 0;
-    while i < 6 {
-        out[i] = head[i];
-        i += 1;
-    }
-    let mut k = 0;
-    while k < 16 {
-        out[6 + k] = x[k];
-        out[22 + k] = y[k];
-        out[38 + k] = l[k];
-        k += 1;
-    }
-    out
-};
-
-/// Mutable references to the fields of one axis, in [`PARAMS`] order.
-fn axis_slots(a: &mut AxisParams) -> [&mut f64; 16] {
-    let [p0, p1, p2, p3, p4] = &mut a.dry_pos;
-    let [n0, n1, n2, n3, n4] = &mut a.dry_neg;
-    [
-        &mut a.inertia,
-        &mut a.gain,
-        &mut a.viscous_pos,
-        &mut a.viscous_neg,
-        p0,
-        p1,
-        p2,
-        p3,
-        p4,
-        n0,
-        n1,
-        n2,
-        n3,
-        n4,
-        &mut a.min,
-        &mut a.max,
-    ]
+/// The model parameters in the FMU's order, [`Slot::Param`] index `i` at value reference
+/// [`VR_PARAM`] + `i`: first the scalars of [`Params`] itself, then the axes' numbers (X, Y,
+/// rope), each in the order of the model's table ([`PARAM_FIELDS`]).
+pub fn params() -> impl Iterator<Item = &'static ParamField> {
+    let own = PARAM_FIELDS.iter().filter(|f| f.axis.is_none());
+    own.chain(PARAM_FIELDS.iter().filter(|f| f.axis.is_some()))
 }
 
-/// Mutable reference to model parameter `i` ([`PARAMS`] order), `None` past the end.
+/// Model parameter `i` ([`params`] order): its entry of the model's table, `None` past the
+/// end.
+pub fn param_field(i: usize) -> Option<&'static ParamField> {
+    params().nth(i)
+}
+
+/// Mutable reference to model parameter `i` ([`params`] order), `None` past the end.
 pub fn param_mut(p: &mut Params, i: usize) -> Option<&mut f64> {
-    match i {
-        0 => Some(&mut p.payload_mass),
-        1 => Some(&mut p.trolley_mass),
-        2 => Some(&mut p.rail_mass),
-        3 => Some(&mut p.gravity),
-        4 => Some(&mut p.damping_alpha),
-        5 => Some(&mut p.damping_beta),
-        6..=21 => axis_slots(&mut p.x).into_iter().nth(i - 6),
-        22..=37 => axis_slots(&mut p.y).into_iter().nth(i - 22),
-        38..=53 => axis_slots(&mut p.rope).into_iter().nth(i - 38),
-        _ => None,
-    }
+    param_field(i).map(|f| (f.get_mut)(p))
 }
 
-/// Model parameter `i` ([`PARAMS`] order), `None` past the end.
+/// Model parameter `i` ([`params`] order), `None` past the end.
 pub fn param(p: &Params, i: usize) -> Option<f64> {
-    let mut copy = *p;
-    param_mut(&mut copy, i).map(|v| *v)
+    param_field(i).map(|f| (f.get)(p))
 }
 
 /// Everything the importer can set before initialisation: model parameters, step, initial
@@ -463,7 +283,7 @@ impl Default for Settings {
 /// Value references: inputs 0..3, outputs from 100, integer outputs from 200, model
 /// parameters from 1000, step 1100, initial state 1101..1110, `tanh` slope 1111, segment
 /// budget 1200, friction law 1201, stiction 1300..1305 (ratio, Stribeck velocity per axis).
-const VR_PARAM: u32 = 1000;
+pub const VR_PARAM: u32 = 1000;
 
 const STICTION_RATIO: [&str; 3] = [
     "stiction[0].ratio",
@@ -679,18 +499,18 @@ fn outputs(v: &mut Vec<Variable>) {
     }
 }
 
-/// The model parameters ([`PARAMS`], from [`VR_PARAM`]) and the model step `config.h`.
+/// The model parameters ([`params`], from [`VR_PARAM`]) and the model step `config.h`.
 fn model_parameters(v: &mut Vec<Variable>) {
-    for (i, (name, unit, desc)) in PARAMS.iter().enumerate() {
+    for (i, f) in params().enumerate() {
         v.push(Variable {
-            range: param_range(i),
+            range: rule_range(f.rule),
             ..real(
-                name,
+                f.name,
                 VR_PARAM + i as u32,
                 Causality::Parameter,
                 Variability::Tunable,
-                unit,
-                desc,
+                f.unit,
+                f.description,
                 Slot::Param(i),
             )
         });
@@ -925,9 +745,47 @@ mod tests {
         // Field names match the model's own error paths.
         let mut p = base;
         p.x.viscous_pos = -1.0;
-        assert_eq!(p.validate().unwrap_err().field, PARAMS[6 + 2].0);
+        assert_eq!(
+            p.validate().unwrap_err().field,
+            param_field(6 + 2).unwrap().name
+        );
         let mut p = base;
         p.rope.dry_neg[0] = f64::NAN;
-        assert_eq!(p.validate().unwrap_err().field, PARAMS[38 + 9].0);
+        assert_eq!(
+            p.validate().unwrap_err().field,
+            param_field(38 + 9).unwrap().name
+        );
+    }
+
+    #[test]
+    fn parameters_keep_their_value_references_and_ranges() {
+        // The FMU's own order: the scalars of `Params`, then X, Y, rope (16 each).
+        let vr = |name: &str| {
+            let v = all();
+            v.iter()
+                .find(|v| v.name == name)
+                .map(|v| (v.vr, v.unit, v.range))
+        };
+        let r = |vr, unit, range| Some((vr, Some(unit), range));
+        assert_eq!(vr("payload_mass"), r(1000, "kg", Range::POSITIVE));
+        assert_eq!(vr("gravity"), r(1003, "m/s2", Range::NON_NEGATIVE));
+        assert_eq!(vr("damping_alpha"), r(1004, "kg.m2/s", Range::NON_NEGATIVE));
+        assert_eq!(vr("damping_beta"), r(1005, "kg.m2/s", Range::NON_NEGATIVE));
+        assert_eq!(vr("x.inertia"), r(1006, "kg", Range::NON_NEGATIVE));
+        assert_eq!(vr("x.gain"), r(1007, "N/V", Range::POSITIVE));
+        assert_eq!(vr("x.dry_pos[2]"), r(1012, "N/m2", Range::ANY));
+        assert_eq!(vr("x.min"), r(1020, "m", Range::ANY));
+        assert_eq!(vr("y.inertia"), r(1022, "kg", Range::NON_NEGATIVE));
+        assert_eq!(vr("rope.dry_neg[4]"), r(1051, "N/m4", Range::ANY));
+        assert_eq!(vr("rope.min"), r(1052, "m", Range::POSITIVE));
+        assert_eq!(vr("rope.max"), r(1053, "m", Range::ANY));
+        assert_eq!(vr("config.h").map(|v| v.0), Some(1100));
+        assert_eq!(params().count(), N_PARAMS);
+        assert_eq!(limit_of(6 + 14), Some((0, LimitEnd::Min)));
+        assert_eq!(limit_of(38 + 15), Some((2, LimitEnd::Max)));
+        assert_eq!(limit_of(5), None);
+        assert_eq!(limit_of(N_PARAMS), None);
+        assert_eq!(param_range(38 + 14), Range::POSITIVE);
+        assert_eq!(param_range(N_PARAMS), Range::ANY);
     }
 }

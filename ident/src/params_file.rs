@@ -2,10 +2,14 @@
 //! reads): exactly `crane_model::Params`, through its `serde` derives (field names and units
 //! as there), so there is one parameter type. Reading checks the syntax, the model's rules
 //! ([`Params::validate`]) and plausible magnitudes ([`plausible`]); every error names the file,
-//! the line and the field.
+//! the line and the field. The fields are those of the model's table
+//! ([`crane_model::params::PARAM_FIELDS`]); what is this file's own is its TOML layout (the
+//! serde derives: the axes as tables `[x]`, `[y]`, `[rope]`, a polynomial as one array) and
+//! the plausible magnitudes.
 
 use crate::num::Num;
-use crane_model::Params;
+use crane_model::params::{param_entries, ParamField, PARAM_FIELDS};
+use crane_model::{Axis, Params};
 use std::path::{Path, PathBuf};
 
 /// The parameter file's contents: the model's own parameter type.
@@ -75,7 +79,18 @@ fn describe(e: &crane_model::Error) -> String {
 }
 
 /// Coefficients of a dry-friction polynomial (`c0 .. c4`).
-pub const DRY_COEFFICIENTS: usize = 5;
+pub use crane_model::params::DRY_COEFFICIENTS;
+
+/// The keys of the polynomials inside an axis table (`dry_pos`, `dry_neg`), in table order.
+fn polynomial_keys() -> Vec<&'static str> {
+    let mut keys = Vec::new();
+    for f in PARAM_FIELDS.iter().filter(|f| f.coefficient == Some(0)) {
+        if !keys.contains(&f.key) {
+            keys.push(f.key);
+        }
+    }
+    keys
+}
 
 /// Every `dry_pos` / `dry_neg` array must have exactly [`DRY_COEFFICIENTS`] entries (a longer
 /// one would otherwise be cut without a word).
@@ -83,9 +98,10 @@ fn check_polynomial_lengths(path: &Path, text: &str) -> Result<(), ParamsError> 
     let Ok(table) = text.parse::<toml::Table>() else {
         return Ok(()); // the typed parse reports the syntax error with its place
     };
+    let keys = polynomial_keys();
     for (axis, v) in &table {
         let Some(t) = v.as_table() else { continue };
-        for key in ["dry_pos", "dry_neg"] {
+        for &key in &keys {
             if let Some(a) = t.get(key).and_then(|a| a.as_array()) {
                 if a.len() != DRY_COEFFICIENTS {
                     let field = format!("{axis}.{key}");
@@ -147,11 +163,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Params, ParamsError> {
     plausible(&p).map_err(|error| ParamsError::Implausible {
         path: path.to_path_buf(),
         line: line_of_field(text, error.field),
-        max: if error.field == "gravity" {
-            MAX_GRAVITY
-        } else {
-            MAX_MAGNITUDE
-        },
+        max: max_magnitude(error.field),
         error,
     })?;
     Ok(p)
@@ -178,28 +190,28 @@ pub fn read(path: &Path) -> Result<Params, ParamsError> {
 /// for it is refused. (Not part of [`parse`]: a `Params` built in Python may hold any
 /// polynomial, and the model's clamp is its documented meaning there.)
 pub fn nonnegative_on_travel(p: &Params) -> Result<(), crane_model::Error> {
-    const NAMES: [[&str; 2]; 3] = [
-        ["x.dry_pos", "x.dry_neg"],
-        ["y.dry_pos", "y.dry_neg"],
-        ["rope.dry_pos", "rope.dry_neg"],
-    ];
-    for (a, n) in p.axes().into_iter().zip(NAMES) {
+    // every polynomial of the table (an axis' `dry_pos`, `dry_neg`), at its first coefficient
+    for f in PARAM_FIELDS.iter().filter(|f| f.coefficient == Some(0)) {
+        let Some(axis) = f.axis else { continue };
+        let a = p.axis(axis);
+        let mut c = [0.0; DRY_COEFFICIENTS];
+        for (c, e) in c.iter_mut().zip(param_entries(f.path)) {
+            *c = (e.get)(p);
+        }
         // a dry-friction polynomial below 0 somewhere on the travel: the model would clamp
         // it to 0 there without a word
-        for (field, c) in [(n[0], &a.dry_pos), (n[1], &a.dry_neg)] {
-            let lowest = (0..=DRY_CHECK_POINTS)
-                .map(|k| {
-                    let p = a.min + (a.max - a.min) * k as f64 / DRY_CHECK_POINTS as f64;
-                    crane_model::friction::horner(c, p)
-                })
-                .fold(f64::INFINITY, f64::min);
-            if lowest < 0.0 {
-                return Err(crane_model::Error {
-                    field,
-                    problem: crane_model::Problem::LevelBelowZero,
-                    value: lowest,
-                });
-            }
+        let lowest = (0..=DRY_CHECK_POINTS)
+            .map(|k| {
+                let p = a.min + (a.max - a.min) * k as f64 / DRY_CHECK_POINTS as f64;
+                crane_model::friction::horner(&c, p)
+            })
+            .fold(f64::INFINITY, f64::min);
+        if lowest < 0.0 {
+            return Err(crane_model::Error {
+                field: f.path,
+                problem: crane_model::Problem::LevelBelowZero,
+                value: lowest,
+            });
         }
     }
     Ok(())
@@ -221,14 +233,28 @@ pub const DRY_CHECK_POINTS: usize = 200;
 /// Largest gravity accepted [m/s^2].
 pub const MAX_GRAVITY: f64 = 100.0;
 
+/// The parameter bounded by [`MAX_GRAVITY`] (the others by [`MAX_MAGNITUDE`]).
+const GRAVITY: &str = "gravity";
+
+/// The largest magnitude accepted for the field at dotted `path` (units of the field).
+fn max_magnitude(path: &str) -> f64 {
+    if path == GRAVITY {
+        MAX_GRAVITY
+    } else {
+        MAX_MAGNITUDE
+    }
+}
+
 /// Plausible magnitudes (beyond [`Params::validate`]'s rules): every value at most
-/// [`MAX_MAGNITUDE`], gravity at most [`MAX_GRAVITY`]. The error names the field with
-/// `Problem::TooLarge`.
+/// [`MAX_MAGNITUDE`], gravity at most [`MAX_GRAVITY`]. The error names the field (a
+/// polynomial as a whole: `x.dry_pos`) with `Problem::TooLarge`. Order: gravity, the other
+/// scalars of `Params`, then per axis its scalars and then its polynomials.
 pub fn plausible(p: &Params) -> Result<(), crane_model::Error> {
-    let too_large = |field: &'static str, value: f64, max: f64| {
-        if value.abs() > max {
+    let too_large = |f: &ParamField| {
+        let value = (f.get)(p);
+        if value.abs() > max_magnitude(f.path) {
             Err(crane_model::Error {
-                field,
+                field: f.path,
                 problem: crane_model::Problem::TooLarge,
                 value,
             })
@@ -236,64 +262,16 @@ pub fn plausible(p: &Params) -> Result<(), crane_model::Error> {
             Ok(())
         }
     };
-    too_large("gravity", p.gravity, MAX_GRAVITY)?;
-    for (f, v) in [
-        ("payload_mass", p.payload_mass),
-        ("trolley_mass", p.trolley_mass),
-        ("rail_mass", p.rail_mass),
-        ("damping_alpha", p.damping_alpha),
-        ("damping_beta", p.damping_beta),
-    ] {
-        too_large(f, v, MAX_MAGNITUDE)?;
+    let own = PARAM_FIELDS.iter().filter(|f| f.axis.is_none());
+    let gravity_first = own.clone().filter(|f| f.path == GRAVITY);
+    for f in gravity_first.chain(own.filter(|f| f.path != GRAVITY)) {
+        too_large(f)?;
     }
-    const NAMES: [[&str; 8]; 3] = [
-        [
-            "x.inertia",
-            "x.gain",
-            "x.viscous_pos",
-            "x.viscous_neg",
-            "x.dry_pos",
-            "x.dry_neg",
-            "x.min",
-            "x.max",
-        ],
-        [
-            "y.inertia",
-            "y.gain",
-            "y.viscous_pos",
-            "y.viscous_neg",
-            "y.dry_pos",
-            "y.dry_neg",
-            "y.min",
-            "y.max",
-        ],
-        [
-            "rope.inertia",
-            "rope.gain",
-            "rope.viscous_pos",
-            "rope.viscous_neg",
-            "rope.dry_pos",
-            "rope.dry_neg",
-            "rope.min",
-            "rope.max",
-        ],
-    ];
-    for (a, n) in p.axes().into_iter().zip(NAMES) {
-        for (f, v) in [
-            (n[0], a.inertia),
-            (n[1], a.gain),
-            (n[2], a.viscous_pos),
-            (n[3], a.viscous_neg),
-            (n[6], a.min),
-            (n[7], a.max),
-        ] {
-            too_large(f, v, MAX_MAGNITUDE)?;
-        }
-        for &c in &a.dry_pos {
-            too_large(n[4], c, MAX_MAGNITUDE)?;
-        }
-        for &c in &a.dry_neg {
-            too_large(n[5], c, MAX_MAGNITUDE)?;
+    for axis in Axis::ALL {
+        let of_axis = PARAM_FIELDS.iter().filter(|f| f.axis == Some(axis));
+        let scalars = of_axis.clone().filter(|f| f.coefficient.is_none());
+        for f in scalars.chain(of_axis.filter(|f| f.coefficient.is_some())) {
+            too_large(f)?;
         }
     }
     Ok(())
@@ -348,6 +326,54 @@ pub fn line_of_field(text: &str, field: &str) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_field_of_the_models_table_is_a_key_of_the_file() {
+        // The table's dotted paths are the serde field names: each is found in the written
+        // file, at its line, with its value (a polynomial's coefficient at its index).
+        let mut p = Params::default();
+        for (i, f) in PARAM_FIELDS.iter().enumerate() {
+            *(f.get_mut)(&mut p) = 0.5 + i as f64;
+        }
+        let text = to_toml(&p);
+        let table: toml::Table = text.parse().unwrap();
+        for f in &PARAM_FIELDS {
+            let mut v = &table[f.path.split('.').next().unwrap()];
+            if f.axis.is_some() {
+                v = &v[f.key];
+            }
+            if let Some(k) = f.coefficient {
+                v = &v[k];
+            }
+            assert_eq!(v.as_float(), Some((f.get)(&p)), "{}", f.name);
+            assert_ne!(line_of_field(&text, f.name), 0, "{}", f.name);
+        }
+        assert!(PARAM_FIELDS.iter().any(|f| f.path == GRAVITY));
+        assert_eq!(polynomial_keys(), ["dry_pos", "dry_neg"]);
+    }
+
+    #[test]
+    fn plausible_names_gravity_then_scalars_then_each_axis_scalars_before_polynomials() {
+        let first = |p: &Params| plausible(p).err().map(|e| e.field);
+        let mut p = Params::default();
+        assert_eq!(first(&p), None);
+        p.rope.dry_neg[4] = 2e6;
+        assert_eq!(first(&p), Some("rope.dry_neg"));
+        p.rope.max = 2e6;
+        assert_eq!(first(&p), Some("rope.max"));
+        p.y.dry_pos[0] = -2e6;
+        assert_eq!(first(&p), Some("y.dry_pos"));
+        p.x.max = 2e6;
+        assert_eq!(first(&p), Some("x.max"));
+        p.damping_beta = 2e6;
+        assert_eq!(first(&p), Some("damping_beta"));
+        p.payload_mass = 2e6;
+        assert_eq!(first(&p), Some("payload_mass"));
+        p.gravity = 101.0;
+        assert_eq!(first(&p), Some("gravity"));
+        assert_eq!(max_magnitude("gravity"), MAX_GRAVITY);
+        assert_eq!(max_magnitude("x.dry_pos"), MAX_MAGNITUDE);
+    }
 
     #[test]
     fn round_trip_is_exact() {

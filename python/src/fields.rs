@@ -1,77 +1,81 @@
 //! Named access to the fields of [`Params`]: the dotted names the model's errors use
-//! (`"payload_mass"`, `"x.viscous_pos"`, `"rope.dry_pos"`), one table for reading, writing
-//! and the nested-dict form.
+//! (`"payload_mass"`, `"x.viscous_pos"`, `"rope.dry_pos"`), for reading, writing and the
+//! nested-dict form. The fields, their names and order are the model's table
+//! ([`crane_model::params::PARAM_FIELDS`]); what is Python's own is that a polynomial is one
+//! value of [`DRY_COEFFICIENTS`] numbers and an axis a nested dict.
 
-use crane_model::{AxisParams, Params};
+use crane_model::params::{param_entries, ParamField, DRY_COEFFICIENTS, PARAM_FIELDS};
+use crane_model::{Axis, Params};
 
-/// Scalar fields at the top level, in file order.
-pub const TOP: [&str; 4] = ["payload_mass", "trolley_mass", "rail_mass", "gravity"];
-/// Scalar fields after the axes.
-pub const SWING: [&str; 2] = ["damping_alpha", "damping_beta"];
-/// Axis tables.
-pub const AXES: [&str; 3] = ["x", "y", "rope"];
-/// Fields of an axis table (`dry_pos`, `dry_neg` are 5 coefficients c0..c4).
-pub const AXIS_FIELDS: [&str; 8] = [
-    "inertia",
-    "gain",
-    "viscous_pos",
-    "viscous_neg",
-    "dry_pos",
-    "dry_neg",
-    "min",
-    "max",
-];
-
-/// A field's storage: one number [SI unit of the field] or a friction polynomial [N].
-pub enum Slot<'a> {
-    /// A scalar.
-    Scalar(&'a mut f64),
-    /// Coefficients c0..c4 of a dry-friction polynomial.
-    Poly(&'a mut [f64; 5]),
+/// Whether `key` names an axis table (`"x"`, `"y"`, `"rope"`).
+pub fn is_axis(key: &str) -> bool {
+    Axis::ALL.iter().any(|a| a.name() == key)
 }
 
-fn axis_slot<'a>(a: &'a mut AxisParams, field: &str) -> Option<Slot<'a>> {
-    Some(match field {
-        "inertia" => Slot::Scalar(&mut a.inertia),
-        "gain" => Slot::Scalar(&mut a.gain),
-        "viscous_pos" => Slot::Scalar(&mut a.viscous_pos),
-        "viscous_neg" => Slot::Scalar(&mut a.viscous_neg),
-        "dry_pos" => Slot::Poly(&mut a.dry_pos),
-        "dry_neg" => Slot::Poly(&mut a.dry_neg),
-        "min" => Slot::Scalar(&mut a.min),
-        "max" => Slot::Scalar(&mut a.max),
-        _ => return None,
+/// The fields as Python sees them, in file order: every table entry, a polynomial once (at
+/// its coefficient `c0`).
+pub fn fields() -> impl Iterator<Item = &'static ParamField> {
+    PARAM_FIELDS
+        .iter()
+        .filter(|f| f.coefficient.unwrap_or(0) == 0)
+}
+
+/// A field's value: one number [SI unit of the field] or a friction polynomial [N, N/m, ...].
+pub enum Value {
+    /// A scalar.
+    Scalar(f64),
+    /// Coefficients c0..c4 of a dry-friction polynomial.
+    Poly([f64; DRY_COEFFICIENTS]),
+}
+
+/// What a field holds.
+pub enum Shape {
+    /// One number.
+    Scalar,
+    /// A dry-friction polynomial of [`DRY_COEFFICIENTS`] numbers.
+    Poly,
+}
+
+/// The shape of the field named `name` (dotted: `"x.gain"`), `None` if there is none.
+pub fn shape(name: &str) -> Option<Shape> {
+    let f = param_entries(name).next()?;
+    Some(match f.coefficient {
+        None => Shape::Scalar,
+        Some(_) => Shape::Poly,
     })
 }
 
-/// The storage of the field named `name` (dotted: `"x.gain"`), or `None` if there is none.
-pub fn slot<'a>(p: &'a mut Params, name: &str) -> Option<Slot<'a>> {
-    if let Some((axis, field)) = name.split_once('.') {
-        let a = match axis {
-            "x" => &mut p.x,
-            "y" => &mut p.y,
-            "rope" => &mut p.rope,
-            _ => return None,
-        };
-        return axis_slot(a, field);
+/// The value of the field named `name`, or `None` if there is none.
+pub fn get(p: &Params, name: &str) -> Option<Value> {
+    Some(match shape(name)? {
+        Shape::Scalar => Value::Scalar(param_entries(name).next().map(|f| (f.get)(p))?),
+        Shape::Poly => {
+            let mut c = [0.0; DRY_COEFFICIENTS];
+            for (c, f) in c.iter_mut().zip(param_entries(name)) {
+                *c = (f.get)(p);
+            }
+            Value::Poly(c)
+        }
+    })
+}
+
+/// Sets the field named `name` (of the shape of `value`); nothing if there is none.
+pub fn set(p: &mut Params, name: &str, value: Value) {
+    match value {
+        Value::Scalar(x) => {
+            for f in param_entries(name) {
+                *(f.get_mut)(p) = x;
+            }
+        }
+        Value::Poly(c) => {
+            for (x, f) in c.into_iter().zip(param_entries(name)) {
+                *(f.get_mut)(p) = x;
+            }
+        }
     }
-    Some(Slot::Scalar(match name {
-        "payload_mass" => &mut p.payload_mass,
-        "trolley_mass" => &mut p.trolley_mass,
-        "rail_mass" => &mut p.rail_mass,
-        "gravity" => &mut p.gravity,
-        "damping_alpha" => &mut p.damping_alpha,
-        "damping_beta" => &mut p.damping_beta,
-        _ => return None,
-    }))
 }
 
 /// Every dotted field name, in file order.
 pub fn names() -> Vec<String> {
-    let mut v: Vec<String> = TOP.iter().map(|s| s.to_string()).collect();
-    for a in AXES {
-        v.extend(AXIS_FIELDS.iter().map(|f| format!("{a}.{f}")));
-    }
-    v.extend(SWING.iter().map(|s| s.to_string()));
-    v
+    fields().map(|f| f.path.to_string()).collect()
 }

@@ -1,8 +1,9 @@
 //! `crane_twin.Params`: validated model parameters, to and from the CLI's TOML files.
 
 use crate::errors::{py_result, Failure};
-use crate::fields::{self, Slot};
+use crate::fields::{self, Shape, Value};
 use crate::params_toml;
+use crane_model::params::DRY_COEFFICIENTS;
 use crane_model::Params;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -28,16 +29,21 @@ fn input_err(py: Python<'_>, msg: String) -> PyErr {
 
 /// Sets the dotted field `name` from a Python value (a number, or 5 numbers for `dry_*`).
 fn set_field(py: Python<'_>, p: &mut Params, name: &str, v: &Bound<'_, PyAny>) -> PyResult<()> {
-    match fields::slot(p, name) {
-        Some(Slot::Scalar(x)) => {
-            *x = v
+    match fields::shape(name) {
+        Some(Shape::Scalar) => {
+            let x = v
                 .extract::<f64>()
                 .map_err(|_| input_err(py, format!("`{name}`: expected a number")))?;
+            fields::set(p, name, Value::Scalar(x));
         }
-        Some(Slot::Poly(c)) => {
-            *c = v
-                .extract::<[f64; 5]>()
-                .map_err(|_| input_err(py, format!("`{name}`: expected 5 numbers c0..c4")))?;
+        Some(Shape::Poly) => {
+            let c = v.extract::<[f64; DRY_COEFFICIENTS]>().map_err(|_| {
+                input_err(
+                    py,
+                    format!("`{name}`: expected {DRY_COEFFICIENTS} numbers c0..c4"),
+                )
+            })?;
+            fields::set(p, name, Value::Poly(c));
         }
         None => {
             return Err(input_err(
@@ -68,7 +74,7 @@ pub fn params_from_dict_unchecked(py: Python<'_>, d: &Bound<'_, PyDict>) -> PyRe
         let key: String = k
             .extract()
             .map_err(|_| input_err(py, "parameter keys must be strings".into()))?;
-        if fields::AXES.contains(&key.as_str()) {
+        if fields::is_axis(&key) {
             let sub = v
                 .cast::<PyDict>()
                 .map_err(|_| input_err(py, format!("`{key}`: expected a dict of axis fields")))?;
@@ -85,14 +91,10 @@ pub fn params_from_dict_unchecked(py: Python<'_>, d: &Bound<'_, PyDict>) -> PyRe
     Ok(p)
 }
 
-fn value_of<'py>(
-    py: Python<'py>,
-    p: &mut Params,
-    name: &str,
-) -> PyResult<Option<Bound<'py, PyAny>>> {
-    Ok(match fields::slot(p, name) {
-        Some(Slot::Scalar(x)) => Some(x.into_pyobject(py)?.into_any()),
-        Some(Slot::Poly(c)) => Some(PyList::new(py, c.iter())?.into_any()),
+fn value_of<'py>(py: Python<'py>, p: &Params, name: &str) -> PyResult<Option<Bound<'py, PyAny>>> {
+    Ok(match fields::get(p, name) {
+        Some(Value::Scalar(x)) => Some(x.into_pyobject(py)?.into_any()),
+        Some(Value::Poly(c)) => Some(PyList::new(py, c.iter())?.into_any()),
         None => None,
     })
 }
@@ -180,20 +182,24 @@ impl PyParams {
 
     /// The nested dict of every field (axis tables `x`, `y`, `rope` as dicts).
     pub fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let mut p = self.inner;
+        let p = &self.inner;
         let d = PyDict::new(py);
-        for name in fields::TOP {
-            d.set_item(name, value_of(py, &mut p, name)?)?;
-        }
-        for axis in fields::AXES {
-            let sub = PyDict::new(py);
-            for f in fields::AXIS_FIELDS {
-                sub.set_item(f, value_of(py, &mut p, &format!("{axis}.{f}"))?)?;
+        // an axis' dict is placed where its first field comes, in file order
+        let mut axes: Vec<(crane_model::Axis, Bound<'py, PyDict>)> = Vec::new();
+        for f in fields::fields() {
+            let value = value_of(py, p, f.path)?;
+            let Some(axis) = f.axis else {
+                d.set_item(f.key, value)?;
+                continue;
+            };
+            if let Some((_, sub)) = axes.iter().find(|(a, _)| *a == axis) {
+                sub.set_item(f.key, value)?;
+            } else {
+                let sub = PyDict::new(py);
+                sub.set_item(f.key, value)?;
+                d.set_item(axis.name(), &sub)?;
+                axes.push((axis, sub));
             }
-            d.set_item(axis, sub)?;
-        }
-        for name in fields::SWING {
-            d.set_item(name, value_of(py, &mut p, name)?)?;
         }
         Ok(d)
     }
@@ -218,8 +224,7 @@ impl PyParams {
 
     /// The value of a dotted field (`p["x.gain"]`): a float, or 5 floats for `dry_*`.
     fn __getitem__<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyAny>> {
-        let mut p = self.inner;
-        value_of(py, &mut p, name)?.ok_or_else(|| {
+        value_of(py, &self.inner, name)?.ok_or_else(|| {
             pyo3::exceptions::PyKeyError::new_err(format!("unknown parameter `{name}`"))
         })
     }
