@@ -1,83 +1,42 @@
-//! Small dense linear algebra: Householder least squares with the usual statistics,
-//! Gaussian elimination, symmetric inverses. Sizes here are a handful of parameters against
-//! up to some hundred thousand samples, so plain loops are enough.
+//! Small dense linear algebra on nalgebra: least squares by Householder QR with the usual
+//! statistics, LU with partial pivoting, symmetric inverses by Cholesky. Sizes here are a
+//! handful of parameters against up to some hundred thousand samples.
+//!
+//! The factorisations are nalgebra's (`DMatrix::lu`, `qr`, `cholesky`): a well-kept crate
+//! instead of our own loops (issue 22). What stays ours is what the callers need beyond a
+//! solution: a rank-deficient regressor named by its column, standard errors and
+//! correlations, and `None` where a factorisation does not exist.
 
+use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
-/// Solves `A x = b` by Gaussian elimination with partial pivoting; `None` if singular.
-pub fn solve_dense(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
+/// Solves `A x = b` (`a` given by rows) by LU with partial pivoting; `None` if singular or if
+/// the solution is not finite.
+pub fn solve_dense(a: Vec<Vec<f64>>, b: Vec<f64>) -> Option<Vec<f64>> {
     let n = b.len();
-    for k in 0..n {
-        let piv = (k..n).max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))?;
-        if a[piv][k].abs() < 1e-300 || !a[piv][k].is_finite() {
-            return None;
-        }
-        a.swap(k, piv);
-        b.swap(k, piv);
-        for i in k + 1..n {
-            let f = a[i][k] / a[k][k];
-            if f != 0.0 {
-                for j in k..n {
-                    a[i][j] -= f * a[k][j];
-                }
-                b[i] -= f * b[k];
-            }
-        }
+    if a.len() != n || a.iter().any(|r| r.len() != n) {
+        return None;
     }
-    let mut x = vec![0.0; n];
-    for i in (0..n).rev() {
-        let mut s = b[i];
-        for j in i + 1..n {
-            s -= a[i][j] * x[j];
-        }
-        x[i] = s / a[i][i];
-    }
-    Some(x)
+    let m = DMatrix::from_fn(n, n, |i, j| a[i][j]);
+    let x = m.lu().solve(&DVector::from_vec(b))?;
+    x.iter()
+        .all(|v| v.is_finite())
+        .then(|| x.as_slice().to_vec())
 }
 
-/// Inverse of a symmetric positive-definite matrix by Cholesky; `None` if not SPD.
+/// Inverse of a symmetric positive-definite matrix (given by rows) by Cholesky; `None` if
+/// not SPD.
 pub fn spd_inverse(a: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
     let n = a.len();
-    let mut l = vec![vec![0.0; n]; n];
-    for i in 0..n {
-        for j in 0..=i {
-            let mut s = a[i][j];
-            for k in 0..j {
-                s -= l[i][k] * l[j][k];
-            }
-            if i == j {
-                if s.is_nan() || s <= 0.0 {
-                    return None;
-                }
-                l[i][i] = s.sqrt();
-            } else {
-                l[i][j] = s / l[j][j];
-            }
-        }
+    if a.iter().any(|r| r.len() != n) || a.iter().flatten().any(|v| !v.is_finite()) {
+        return None;
     }
-    // inv(L)
-    let mut li = vec![vec![0.0; n]; n];
-    for i in 0..n {
-        li[i][i] = 1.0 / l[i][i];
-        for j in 0..i {
-            let mut s = 0.0;
-            for k in j..i {
-                s -= l[i][k] * li[k][j];
-            }
-            li[i][j] = s / l[i][i];
-        }
-    }
-    let mut inv = vec![vec![0.0; n]; n];
-    for i in 0..n {
-        for j in 0..n {
-            let mut s = 0.0;
-            for k in i.max(j)..n {
-                s += li[k][i] * li[k][j];
-            }
-            inv[i][j] = s;
-        }
-    }
-    Some(inv)
+    let inv = DMatrix::from_fn(n, n, |i, j| a[i][j]).cholesky()?.inverse();
+    Some(
+        (0..n)
+            .map(|i| (0..n).map(|j| inv[(i, j)]).collect())
+            .collect(),
+    )
 }
 
 /// A least-squares fit `y ~ X theta` with its statistics.
@@ -127,6 +86,10 @@ pub enum LsError {
 
 /// Ordinary least squares by Householder QR (what MATLAB's backslash does for a tall matrix).
 /// `cols` are the regressor columns, all of the length of `y`.
+///
+/// A column is not excited (rank deficient) when its diagonal entry of R, the part of it no
+/// earlier column explains, is below `1e-12` of its largest entry, or below `1e-13` of R's
+/// largest diagonal entry.
 pub fn lstsq(what: &str, names: &[&str], cols: &[Vec<f64>], y: &[f64]) -> Result<LsFit, LsError> {
     let p = cols.len();
     let n = y.len();
@@ -137,58 +100,36 @@ pub fn lstsq(what: &str, names: &[&str], cols: &[Vec<f64>], y: &[f64]) -> Result
             p,
         });
     }
-    // Column-major copy.
-    let mut a: Vec<Vec<f64>> = cols.to_vec();
-    let mut qty = y.to_vec();
-    let mut rdiag = vec![0.0; p];
-    for k in 0..p {
-        let norm = a[k][k..].iter().map(|v| v * v).sum::<f64>().sqrt();
-        let scale = a[k].iter().map(|v| v.abs()).fold(0.0, f64::max);
-        if norm <= 1e-12 * scale.max(1e-300) || norm == 0.0 {
-            return Err(LsError::RankDeficient {
-                what: what.into(),
-                column: names.get(k).copied().unwrap_or("?").into(),
-            });
+    let rank_deficient = |k: usize| LsError::RankDeficient {
+        what: what.into(),
+        column: names.get(k).copied().unwrap_or("?").into(),
+    };
+    if let Some(k) = cols.iter().position(|c| c.len() != n) {
+        return Err(rank_deficient(k));
+    }
+    let x = DMatrix::from_fn(n, p, |i, j| cols[j][i]);
+    let qr = x.qr();
+    let r = qr.r();
+    let rdiag: Vec<f64> = (0..p).map(|k| r[(k, k)]).collect();
+    for (k, (rk, c)) in rdiag.iter().zip(cols).enumerate() {
+        let scale = c.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        if rk.is_nan() || rk.abs() <= 1e-12 * scale.max(1e-300) {
+            return Err(rank_deficient(k));
         }
-        let alpha = if a[k][k] > 0.0 { -norm } else { norm };
-        let mut v: Vec<f64> = a[k][k..].to_vec();
-        v[0] -= alpha;
-        let vnorm2: f64 = v.iter().map(|x| x * x).sum();
-        rdiag[k] = alpha;
-        if vnorm2 > 0.0 {
-            for col in a.iter_mut().skip(k) {
-                let dot: f64 = col[k..].iter().zip(&v).map(|(c, vi)| c * vi).sum();
-                let f = 2.0 * dot / vnorm2;
-                for (c, vi) in col[k..].iter_mut().zip(&v) {
-                    *c -= f * vi;
-                }
-            }
-            let dot: f64 = qty[k..].iter().zip(&v).map(|(c, vi)| c * vi).sum();
-            let f = 2.0 * dot / vnorm2;
-            for (c, vi) in qty[k..].iter_mut().zip(&v) {
-                *c -= f * vi;
-            }
-        }
-        a[k][k] = alpha;
     }
     let rmax = rdiag.iter().map(|v| v.abs()).fold(0.0, f64::max);
     let rmin = rdiag.iter().map(|v| v.abs()).fold(f64::INFINITY, f64::min);
-    for (k, r) in rdiag.iter().enumerate() {
-        if r.abs() < 1e-13 * rmax {
-            return Err(LsError::RankDeficient {
-                what: what.into(),
-                column: names.get(k).copied().unwrap_or("?").into(),
-            });
-        }
+    if let Some(k) = rdiag.iter().position(|r| r.abs() < 1e-13 * rmax) {
+        return Err(rank_deficient(k));
     }
-    let mut theta = vec![0.0; p];
-    for i in (0..p).rev() {
-        let mut s = qty[i];
-        for j in i + 1..p {
-            s -= a[j][i] * theta[j];
-        }
-        theta[i] = s / a[i][i];
-    }
+    // theta = R^-1 (Q^T y)
+    let mut qty = DVector::from_column_slice(y);
+    qr.q_tr_mul(&mut qty);
+    let qty = qty.rows(0, p).into_owned();
+    let theta_v = r
+        .solve_upper_triangular(&qty)
+        .ok_or_else(|| rank_deficient(p.saturating_sub(1)))?;
+    let theta: Vec<f64> = theta_v.as_slice().to_vec();
     let mut ss = 0.0;
     let mut yy = 0.0;
     for (k, yk) in y.iter().enumerate() {
@@ -198,32 +139,15 @@ pub fn lstsq(what: &str, names: &[&str], cols: &[Vec<f64>], y: &[f64]) -> Result
     }
     let sigma = (ss / (n - p) as f64).sqrt();
     // (X^T X)^-1 = R^-1 R^-T
-    let mut rinv = vec![vec![0.0; p]; p];
-    for i in (0..p).rev() {
-        rinv[i][i] = 1.0 / a[i][i];
-        for j in i + 1..p {
-            let mut s = 0.0;
-            for k in i + 1..=j {
-                s -= a[k][i] * rinv[k][j];
-            }
-            rinv[i][j] = s / a[i][i];
-        }
-    }
-    let mut cov = vec![vec![0.0; p]; p];
-    for i in 0..p {
-        for j in 0..p {
-            let mut s = 0.0;
-            for k in i.max(j)..p {
-                s += rinv[i][k] * rinv[j][k];
-            }
-            cov[i][j] = s * sigma * sigma;
-        }
-    }
-    let std_err: Vec<f64> = (0..p).map(|i| cov[i][i].sqrt()).collect();
+    let rinv = r
+        .solve_upper_triangular(&DMatrix::identity(p, p))
+        .ok_or_else(|| rank_deficient(p.saturating_sub(1)))?;
+    let cov = &rinv * rinv.transpose() * (sigma * sigma);
+    let std_err: Vec<f64> = (0..p).map(|i| cov[(i, i)].sqrt()).collect();
     let correlation = (0..p)
         .map(|i| {
             (0..p)
-                .map(|j| cov[i][j] / (std_err[i] * std_err[j]))
+                .map(|j| cov[(i, j)] / (std_err[i] * std_err[j]))
                 .collect()
         })
         .collect();
@@ -289,6 +213,27 @@ mod tests {
         let y = vec![1.0, 2.0, 3.0, 4.0];
         let err = lstsq("t", &["a", "zero"], &[vec![1.0; 4], vec![0.0; 4]], &y).unwrap_err();
         assert!(matches!(err, LsError::RankDeficient { ref column, .. } if column == "zero"));
+    }
+
+    #[test]
+    fn solve_dense_pivots_and_refuses_a_singular_matrix() {
+        // a zero first pivot: elimination without row exchange would divide by it
+        let a = vec![
+            vec![0.0, 2.0, 1.0],
+            vec![1.0, 1.0, 0.0],
+            vec![2.0, 0.0, 3.0],
+        ];
+        let x = solve_dense(a.clone(), vec![5.0, 3.0, 11.0]).unwrap();
+        for (row, b) in a.iter().zip([5.0, 3.0, 11.0]) {
+            let ax: f64 = row.iter().zip(&x).map(|(r, x)| r * x).sum();
+            assert!((ax - b).abs() < 1e-12, "{x:?}");
+        }
+        let singular = vec![vec![1.0, 2.0], vec![2.0, 4.0]];
+        assert!(solve_dense(singular, vec![1.0, 2.0]).is_none());
+        assert!(
+            solve_dense(vec![vec![1.0, 2.0]], vec![1.0]).is_none(),
+            "not square"
+        );
     }
 
     #[test]
