@@ -111,9 +111,25 @@ ensure_venv() {
 }
 fmu_target="${CARGO_TARGET_DIR:-target}"
 case "$fmu_target" in /*) ;; *) fmu_target="$PWD/$fmu_target" ;; esac
-bash scripts/build-fmu.sh "$fmu_target/crane.fmu"
 cargo build --release --bin crane
-ensure_venv "fmpy>=0.3.32,<0.4" pytest
+ensure_venv "fmpy>=0.3.32,<0.4" pytest==9.2.0 numpy==2.4.6
+# ---- strangers (issue 20), started as soon as `crane` and numpy are there, waited for at the
+# end: an independent single-axis plant (tools/strangers: numpy only, written from a physics
+# spec without reading diagnose/): its physics tests, and the sweep of the release `crane
+# diagnose` over its 70 seeded cases (about 5 min on 2 idle cores): no crash or timeout, no
+# honesty failure (a diverged figure, a delay in samples only, a finding at a grid edge), and
+# the per-cause floors of test_strangers.py. It runs beside the FMU and python blocks below,
+# which wait on downloads, single-threaded pytest runs and link-time optimisation much of
+# their time. The shared venv gets numpy and pytest at the versions the python block pins, so
+# that block installs nothing over them while the sweep runs. The per-case timeout is a hang
+# guard, not a speed figure: 300 s, where the slowest case took 101 s alone on 2 idle cores
+# (the published set, 2026-11-27) and may share them with the FMU's and the wheel's builds.
+strangers_log="$fmu_target/strangers.log"
+CRANE_BIN="$fmu_target/release/crane" STRANGERS_TIMEOUT=300 \
+  "$VENV_PY" -m pytest -q -p no:cacheprovider tools/strangers/test_strangers.py \
+  > "$strangers_log" 2>&1 < /dev/null &
+strangers_pid=$!
+bash scripts/build-fmu.sh "$fmu_target/crane.fmu"
 # (its pytest runs after the python block: the FMU with stiction and the tanh law is compared
 # bit for bit with `crane_twin`, which is installed there)
 # ---- end FMU ------------------------------------------------------------------------------
@@ -141,20 +157,6 @@ step "python: crane_twin wheel (scripts/build-wheel.sh; maturin + zig, manylinux
 venv="$(python_venv)"
 "$venv/bin/python" -m pip install -q --disable-pip-version-check \
   maturin==1.16.0 ziglang==0.17.1 numpy==2.4.6 gymnasium==1.4.0 pytest==9.2.0 pdoc==16.0.0
-# ---- strangers (issue 20), started here and waited for at the end: an independent
-# single-axis plant (tools/strangers: numpy only, written from a physics spec without reading
-# diagnose/): its physics tests, and the sweep of the release `crane diagnose` over its 70
-# seeded cases (about 5 min on 2 idle cores): no crash or timeout, no honesty failure (a
-# diverged figure, a delay in samples only, a finding at a grid edge), and the per-cause
-# floors of test_strangers.py. It runs beside the python and FMU blocks below, which wait on
-# downloads and single-threaded pytest runs much of their time. The per-case timeout is a
-# hang guard, not a speed figure: 300 s, where the slowest case took 101 s alone on 2 idle
-# cores (the published set, 2026-11-27) and may share them with the wheel's build here.
-strangers_log="$fmu_target/strangers.log"
-CRANE_BIN="$fmu_target/release/crane" STRANGERS_TIMEOUT=300 \
-  "$venv/bin/python" -m pytest -q -p no:cacheprovider tools/strangers/test_strangers.py \
-  > "$strangers_log" 2>&1 < /dev/null &
-strangers_pid=$!
 # The clean venv, new each run, has no pip of its own (the shared venv's pip installs into it,
 # 5 s less); its dependencies download and install while the wheel builds (10 s less). mypy:
 # test_stubs.py's stubtest of the installed _native.pyi (skipped without it; 5 s).
