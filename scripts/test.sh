@@ -199,7 +199,7 @@ step "scipy peer: pytest tools/scripts/test_scipy_peer.py"
 "$venv/bin/python" -m pytest -q -p no:cacheprovider tools/scripts/test_scipy_peer.py
 # ---- end scipy peer ------------------------------------------------------------------------
 
-step "strangers: the independent plant's tests and the diagnose sweep (started with the python block)"
+step "strangers: the independent plant's tests and the diagnose sweep (started after the release build of crane)"
 strangers_rc=0; wait "$strangers_pid" || strangers_rc=$?
 cat "$strangers_log"
 [ "$strangers_rc" -eq 0 ] || { echo "strangers: pytest failed (exit $strangers_rc)" >&2; exit 1; }
