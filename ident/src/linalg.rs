@@ -82,6 +82,19 @@ pub enum LsError {
         /// Offending column.
         column: String,
     },
+    /// A regressor column whose length is not that of `y` (the caller's error, not the
+    /// data's).
+    #[error("least squares `{what}`: regressor `{column}` has {len} samples, y has {n}")]
+    ColumnLength {
+        /// Which problem.
+        what: String,
+        /// Offending column.
+        column: String,
+        /// Its length.
+        len: usize,
+        /// Length of `y`.
+        n: usize,
+    },
 }
 
 /// Ordinary least squares by Householder QR (what MATLAB's backslash does for a tall matrix).
@@ -105,7 +118,12 @@ pub fn lstsq(what: &str, names: &[&str], cols: &[Vec<f64>], y: &[f64]) -> Result
         column: names.get(k).copied().unwrap_or("?").into(),
     };
     if let Some(k) = cols.iter().position(|c| c.len() != n) {
-        return Err(rank_deficient(k));
+        return Err(LsError::ColumnLength {
+            what: what.into(),
+            column: names.get(k).copied().unwrap_or("?").into(),
+            len: cols[k].len(),
+            n,
+        });
     }
     let x = DMatrix::from_fn(n, p, |i, j| cols[j][i]);
     let qr = x.qr();
@@ -122,7 +140,8 @@ pub fn lstsq(what: &str, names: &[&str], cols: &[Vec<f64>], y: &[f64]) -> Result
     if let Some(k) = rdiag.iter().position(|r| r.abs() < 1e-13 * rmax) {
         return Err(rank_deficient(k));
     }
-    // theta = R^-1 (Q^T y)
+    // theta = R^-1 (Q^T y) by back substitution (not by the inverse below: that would cost
+    // accuracy on an ill-conditioned R for one triangular solve saved, once per fit)
     let mut qty = DVector::from_column_slice(y);
     qr.q_tr_mul(&mut qty);
     let qty = qty.rows(0, p).into_owned();
@@ -213,6 +232,12 @@ mod tests {
         let y = vec![1.0, 2.0, 3.0, 4.0];
         let err = lstsq("t", &["a", "zero"], &[vec![1.0; 4], vec![0.0; 4]], &y).unwrap_err();
         assert!(matches!(err, LsError::RankDeficient { ref column, .. } if column == "zero"));
+        // a column of the wrong length is the caller's error, named as such (no index panic)
+        let err = lstsq("t", &["a", "short"], &[vec![1.0; 4], vec![1.0; 3]], &y).unwrap_err();
+        assert!(
+            matches!(err, LsError::ColumnLength { ref column, len: 3, n: 4, .. } if column == "short"),
+            "{err}"
+        );
     }
 
     #[test]

@@ -158,6 +158,7 @@ fn irregular_stamps_are_resampled_by_zero_order_hold_and_said() {
             rows_out,
             step_s,
             why,
+            exact,
         } => {
             assert_eq!(*rows_in, 200);
             // the grid step is the mean of the ordinary steps (7 and 13 ms here), not the
@@ -165,15 +166,67 @@ fn irregular_stamps_are_resampled_by_zero_order_hold_and_said() {
             assert!((step_s - 0.01).abs() < 1e-4, "{step_s}");
             assert_eq!(*rows_out, a.t.len());
             assert!(why.irregular_steps > 90, "{why:?}");
+            assert!(*exact, "a position fresh on every row is interpolated");
         }
         other => panic!("{other:?}"),
     }
-    // uniform grid, never the mean step of the file, values held from the last row at or
-    // before each instant
+    // uniform grid, never the mean step of the file; the position read at each instant
+    // between the rows around it, the input averaged over the period it is applied
     let h = a.t[1] - a.t[0];
     for (k, w) in a.t.windows(2).enumerate() {
         assert!((w[1] - w[0] - h).abs() < 1e-9, "{k}");
     }
+    for (k, &g) in a.t.iter().enumerate() {
+        let j = rows.iter().rposition(|r| r.0 <= g + 1e-12).unwrap();
+        let x = match rows.get(j + 1) {
+            Some(next) => {
+                let r = rows[j];
+                r.1 + (next.1 - r.1) * (g - r.0) / (next.0 - r.0)
+            }
+            None => rows[j].1,
+        };
+        assert!((a.x[k] - x).abs() < 1e-12, "{k}: {} {x}", a.x[k]);
+        // the held input's mean over [g, g + h)
+        let mut area = 0.0;
+        for (i, r) in rows.iter().enumerate() {
+            let end = rows.get(i + 1).map_or(f64::INFINITY, |n| n.0);
+            let (lo, hi) = (r.0.max(g), end.min(g + h));
+            if hi > lo {
+                area += r.2 * (hi - lo);
+            }
+        }
+        assert!(
+            (a.u[k] - area / h).abs() < 1e-9,
+            "{k}: {} {}",
+            a.u[k],
+            area / h
+        );
+        // read at the grid instant itself
+        assert_eq!(a.source_t[k], g, "{k}");
+    }
+    assert!(a.notes[0].to_string().contains("interpolated linearly"));
+}
+
+#[test]
+fn a_held_position_keeps_the_rows_zero_order_hold() {
+    // the same jittered stamps, the position refreshed only every 3 rows: the rows' values
+    // and stamps are kept (the held channel is rebuilt from its fresh rows later)
+    let mut s = String::from("t,x,u\n");
+    let mut rows = Vec::new();
+    for k in 0..200 {
+        let t = k as f64 * 0.01 + if k % 2 == 1 { 0.003 } else { 0.0 };
+        // a swing, so that its changes are not single counts of a slow motion
+        let x = (0.05 * (3 * (k / 3)) as f64).sin();
+        rows.push((t, x, k as f64));
+        let _ = writeln!(s, "{t},{x},{}", k as f64);
+    }
+    let ds = ok("", &s);
+    let a = ds.runs[0].axis().unwrap();
+    assert!(
+        matches!(a.notes[0], LoadNote::Resampled { exact: false, .. }),
+        "{:?}",
+        a.notes
+    );
     for (k, &g) in a.t.iter().enumerate() {
         let last = rows.iter().rev().find(|r| r.0 <= g + 1e-12).unwrap();
         assert_eq!(a.x[k], last.1, "{k}");

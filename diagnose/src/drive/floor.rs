@@ -6,8 +6,9 @@
 //! its time jitter, the number and length of the runs. So the fitted baseline is taken as the
 //! truth, and the logging is replayed on it:
 //! - the truth is simulated at [`SUBSTEPS`] steps per sample, its input switching at the
-//!   instants the file's rows were taken (`DriveRun::input_at`: for a resampled log, the
-//!   stamps of the rows the loader's zero-order hold picked), not at the grid's;
+//!   instants the file's rows were taken (`DriveRun::input_at`: for a log resampled by
+//!   zero-order hold, the stamps of the rows the hold picked; the grid's own instants when
+//!   the loader interpolated the position and averaged the input over each sample);
 //! - each position is read at the instant the logged one was (`DriveRun::read_at`: the
 //!   row's own stamp, or a held channel's last fresh row), put on the encoder's count
 //!   through the run's first position, and held between fresh reads as the log held it;

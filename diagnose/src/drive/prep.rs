@@ -27,8 +27,8 @@ pub struct DriveRun {
     /// logger repeats `x` between refreshes, and `x` is then [`unhold`]'s reconstruction).
     pub refresh: usize,
     /// Per sample, when its input was taken [s from the run's first sample]: the sample's own
-    /// instant `k dt`, or for a resampled log the stamp of the file row it holds
-    /// (`crane_ident::data::AxisRun::source_t`).
+    /// instant `k dt`, or for a log resampled by zero-order hold the stamp of the file row it
+    /// holds (`crane_ident::data::AxisRun::source_t`).
     pub input_at: Vec<f64>,
     /// Per sample, when the logged position it rebuilds was read [s from the run's first
     /// sample] ([`read_instants`]).

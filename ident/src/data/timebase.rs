@@ -61,6 +61,10 @@ pub enum LoadNote {
         rows_out: usize,
         /// Grid step [s] ([`Irregularity::grid_step_s`]).
         step_s: f64,
+        /// The position was interpolated at the grid instants and the inputs averaged over
+        /// each grid period ([`interpolate`], [`hold_mean`]); `false`: every channel took
+        /// the last row at or before each instant (a held position, a closed loop).
+        exact: bool,
     },
     /// A channel refreshed only every few rows (repeated values while it moves).
     HeldChannel {
@@ -88,16 +92,22 @@ impl fmt::Display for LoadNote {
                 rows_in,
                 rows_out,
                 step_s,
+                exact,
             } => write!(
                 f,
                 "irregular time stamps ({} steps outside +-{:.0} % of the median step {} s, \
                  worst {} s at line {}): {rows_in} rows resampled to {rows_out} samples every \
-                 {step_s} s by zero-order hold",
+                 {step_s} s {}",
                 why.irregular_steps,
                 JITTER_TOLERANCE * 100.0,
                 why.median_step_s,
                 why.step_s,
-                why.line
+                why.line,
+                if *exact {
+                    "(the position interpolated linearly between its rows, the inputs averaged over each sample period)"
+                } else {
+                    "by zero-order hold"
+                }
             ),
             LoadNote::HeldChannel {
                 column,
@@ -217,9 +227,83 @@ pub fn zoh_rows(t: &[f64], h: f64) -> (Vec<f64>, Vec<usize>) {
     (grid, rows)
 }
 
+/// A sampled signal `(t, c)` read at the `grid` instants by linear interpolation between the
+/// rows around each (held beyond the last row): for a position, whose samples were taken at
+/// the stamps of their rows. The zero-order hold of [`zoh_rows`] would read it up to a grid
+/// step late, a jitter that the derivative estimates take for motion (`v` times up to the
+/// step: at 0.05 m/s and a 15 ms step 0.75 mm, many encoder counts). `t` strictly
+/// increasing, `grid` non-decreasing from `t[0]`. Work O(rows + grid).
+pub fn interpolate(t: &[f64], c: &[f64], grid: &[f64]) -> Vec<f64> {
+    let n = t.len().min(c.len());
+    if n == 0 {
+        return vec![f64::NAN; grid.len()];
+    }
+    let mut j = 0;
+    grid.iter()
+        .map(|&g| {
+            while j + 1 < n && t[j + 1] <= g {
+                j += 1;
+            }
+            if j + 1 >= n || g <= t[j] {
+                return c[j];
+            }
+            let f = (g - t[j]) / (t[j + 1] - t[j]);
+            c[j] + (c[j + 1] - c[j]) * f
+        })
+        .collect()
+}
+
+/// A held signal `(t, c)` (each row's value in force from its stamp until the next row's)
+/// averaged over each grid period `[g, g + h)`: the input a simulation holding one value per
+/// period must apply to deliver the same impulse. Holding the last row's value instead
+/// applies each change up to a step late, a lag that a fitted delay or inertia would take
+/// up. Beyond the last row its value is held. `t` strictly increasing, `grid` increasing from
+/// `t[0]` by `h > 0`; NaN for an empty signal. Work O(rows + grid).
+pub fn hold_mean(t: &[f64], c: &[f64], grid: &[f64], h: f64) -> Vec<f64> {
+    let n = t.len().min(c.len());
+    if n == 0 {
+        return vec![f64::NAN; grid.len()];
+    }
+    let mut j = 0;
+    grid.iter()
+        .map(|&g| {
+            let end = g + h;
+            while j + 1 < n && t[j + 1] <= g {
+                j += 1;
+            }
+            // the row in force at g, then every row starting inside the period
+            let (mut area, mut from, mut k) = (0.0, g, j);
+            while k + 1 < n && t[k + 1] < end {
+                area += c[k] * (t[k + 1] - from);
+                from = t[k + 1];
+                k += 1;
+            }
+            area += c[k] * (end - from);
+            area / h
+        })
+        .collect()
+}
+
 /// Picks `rows` of a column.
 pub fn pick(c: &[f64], rows: &[usize]) -> Vec<f64> {
     rows.iter().map(|&j| c[j]).collect()
+}
+
+/// Whether a channel is seen fresh on every row: of its changes at most
+/// [`HELD_MAX_REFRESH_ROWS`] rows apart (at least [`HELD_MIN_CHANGES`] of them), more than
+/// [`HELD_MAX_CONSECUTIVE_SHARE`] come on consecutive rows, which a channel refreshed every
+/// few rows never does. A channel that changes less often than its rows (a fine encoder's
+/// slow motion, or a hold [`held_channel`] cannot tell from one: single counts) is not.
+pub fn fresh_every_row(c: &[f64]) -> bool {
+    let changes: Vec<usize> = (1..c.len()).filter(|&k| c[k] != c[k - 1]).collect();
+    let gaps: Vec<usize> = changes
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .filter(|&g| g <= HELD_MAX_REFRESH_ROWS)
+        .collect();
+    let consecutive = gaps.iter().filter(|&&g| g == 1).count();
+    gaps.len() >= HELD_MIN_CHANGES
+        && consecutive as f64 > HELD_MAX_CONSECUTIVE_SHARE * gaps.len() as f64
 }
 
 /// Whether a channel is held (refreshed every few rows): `Some((rows_per_refresh,
@@ -322,6 +406,47 @@ mod tests {
         assert_eq!(g.len(), 5);
         assert_eq!(r, vec![0, 1, 1, 3, 3]);
         assert!((g[4] - 0.4).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_channel_is_fresh_on_every_row_only_if_it_changes_on_consecutive_rows() {
+        let every: Vec<f64> = (0..300).map(|k| (k as f64 * 0.05).sin()).collect();
+        assert!(fresh_every_row(&every));
+        // refreshed every 3 rows, by single counts or not
+        let held: Vec<f64> = (0..300).map(|k| (3 * (k / 3)) as f64 * 1e-3).collect();
+        assert!(!fresh_every_row(&held));
+        // a slow motion of single counts every 4 rows, and a rest
+        let slow: Vec<f64> = (0..300).map(|k| (k / 4) as f64 * 1e-3).collect();
+        assert!(!fresh_every_row(&slow));
+        assert!(!fresh_every_row(&[0.0; 50]));
+    }
+
+    #[test]
+    fn positions_are_interpolated_and_inputs_averaged_over_the_period() {
+        let t = [0.0, 0.12, 0.19, 0.33];
+        // a ramp is read exactly at the grid instants, held beyond the last row
+        let x: Vec<f64> = t.iter().map(|s| 2.0 * s).collect();
+        let g = [0.0, 0.1, 0.2, 0.3, 0.4];
+        let xi = interpolate(&t, &x, &g);
+        for (a, b) in xi.iter().zip([0.0, 0.2, 0.4, 0.6, 0.66]) {
+            assert!((a - b).abs() < 1e-12, "{xi:?}");
+        }
+        // a held input: 1 from 0, 3 from 0.12, 5 from 0.19, 7 from 0.33
+        let u = [1.0, 3.0, 5.0, 7.0];
+        let um = hold_mean(&t, &u, &g, 0.1);
+        let want = [
+            1.0,
+            (0.02 * 1.0 + 0.07 * 3.0 + 0.01 * 5.0) / 0.1,
+            5.0,
+            (0.03 * 5.0 + 0.07 * 7.0) / 0.1,
+            7.0,
+        ];
+        for (a, b) in um.iter().zip(want) {
+            assert!((a - b).abs() < 1e-12, "{um:?}");
+        }
+        // the impulse over the record is kept
+        let total: f64 = um[..3].iter().sum::<f64>() * 0.1;
+        assert!((total - (0.12 * 1.0 + 0.07 * 3.0 + 0.11 * 5.0)).abs() < 1e-12);
     }
 
     #[test]
