@@ -122,18 +122,6 @@ impl Debounce {
         false
     }
 
-    /// Raises the alarm now, on a condition confirmed elsewhere (a sequential test that has
-    /// already summed the evidence of several evaluations): it stands, and is released as
-    /// usual after [`Debounce::RELEASE`] clear evaluations. Returns `true` when it was not
-    /// standing already (the alarm is to be raised now).
-    pub fn latch(&mut self) -> bool {
-        self.run = Self::CONFIRM;
-        self.clear = 0;
-        let raised = !self.standing;
-        self.standing = true;
-        raised
-    }
-
     /// Whether the alarm stands.
     pub fn standing(&self) -> bool {
         self.standing

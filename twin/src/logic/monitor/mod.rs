@@ -99,14 +99,6 @@ pub struct Settings {
     pub level_learn: u32,
     /// Restarts per direction over which the breakaway ratio is learned before it is judged.
     pub restarts_learn: u16,
-    /// Allowance of the drift's sequential test ([`DriftTest`]) in standard deviations of a
-    /// long move's level [1]: half the change it is designed for, `k / 2` (the change the
-    /// level check raises, `k` standard deviations).
-    pub drift_k: f32,
-    /// Decision interval of the drift's sequential test, in the same units [1]: its evidence
-    /// is the log-likelihood ratio over `2 drift_k`, so a false alarm takes on average at least
-    /// `exp(2 drift_k drift_h)` moves (Wald's bound, for independent Gaussian levels).
-    pub drift_h: f32,
 }
 
 impl Settings {
@@ -147,8 +139,6 @@ impl Settings {
             local_bins: 4,
             level_learn: 16,
             restarts_learn: breakaway::WARM,
-            drift_k: 0.5 * k,
-            drift_h: DRIFT_LOG_ARL / k,
         }
     }
 }
@@ -233,9 +223,6 @@ struct Checks {
     level_n: u32,
     /// The level at the last evaluation [N].
     level: f32,
-    /// Mean and scatter of the levels of this map's moves over at least [`MOVE_BINS`] judged
-    /// bins, around their mean, for the drift's sequential test ([`Monitor::drift_test`]).
-    moves: MoveStat,
 }
 
 /// What commissioning has seen of one axis and direction ([`Monitor::coverage`]).
@@ -258,95 +245,6 @@ const FRESH_MOVES: u16 = 8;
 
 /// Weight of a move's level in its band once learned: about 256 moves.
 const LEVEL_SLOW: f32 = 1.0 / 256.0;
-
-/// `ln` of the least mean number of moves between two false alarms of one side of a map's
-/// drift test (Wald's bound `exp(2 drift_k drift_h)` with `drift_k = k / 2`, so `drift_h =
-/// DRIFT_LOG_ARL / k`: 5 at `k = 5`). 25: 7e10 moves for independent Gaussian levels. The
-/// levels are neither: on the own rig's clean hours they wander together with the crane's
-/// configuration (a move's level 0.13-0.19 N off for several moves), and with 15 (`drift_h =
-/// 3`) the 20 clean hours raised 6 false `friction_drift` with one test per axis over both
-/// directions, 3 with one per map; with 25 and one per map, none. At 25 a move gives at most
-/// half the interval, 2.5, from 5 standard deviations: two such moves of a map raise, as
-/// the level check's two in a row, but with moves between them, and several smaller ones
-/// add up.
-const DRIFT_LOG_ARL: f32 = 25.0;
-/// Long moves a map's [`MoveStat`] must have learned from before the drift test uses it: the
-/// scatter of 16 moves is within -30 %/+29 % of the truth at 90 % (chi-square, 15 degrees of
-/// freedom), and the test's unit is that scatter.
-const DRIFT_LEARN: u32 = 16;
-
-/// Mean and variance of the level of a map's moves, learned with weight `1/n` during
-/// commissioning (and until [`DRIFT_LEARN`] moves), then [`LEVEL_SLOW`].
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-struct MoveStat {
-    /// Mean [N].
-    mean: f32,
-    /// Variance [N^2].
-    var: f32,
-    /// Moves learned from (saturating).
-    n: u32,
-}
-
-impl MoveStat {
-    fn learn(&mut self, x: f32) {
-        self.n = self.n.saturating_add(1);
-        let w = 1.0 / self.n as f32;
-        let w = if w > LEVEL_SLOW { w } else { LEVEL_SLOW };
-        let d = x - self.mean;
-        self.mean += w * d;
-        self.var = (1.0 - w) * (self.var + w * d * d);
-    }
-
-    fn usable(&self) -> bool {
-        self.n >= DRIFT_LEARN && self.var > 0.0 && self.var.is_finite()
-    }
-}
-
-/// The drift's sequential test of one map, axis and direction (Page's CUSUM, one sum per
-/// sign), fed by its moves ([`Monitor::drift_test`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-struct DriftTest {
-    /// Evidence of a rise and of a fall [1] (0: none).
-    sum: [f32; 2],
-}
-
-/// Square root of `x >= 0` (0 otherwise) from an initial guess on the exponent's bits and
-/// Newton's iteration: only IEEE operations, so the same bits on the host and the Cortex-M4F
-/// (`core` has no `sqrt`). Within an ulp or two for the variances here.
-fn sqrt_f32(x: f32) -> f32 {
-    if x.is_nan() || x <= 0.0 || !x.is_finite() {
-        return 0.0;
-    }
-    let mut y = f32::from_bits((x.to_bits() >> 1) + 0x1fbd_1df5);
-    for _ in 0..4 {
-        y = 0.5 * (y + x / y);
-    }
-    y
-}
-
-/// The two statistics of a move over `m` judged bins, `local_bins < m < MOVE_BINS`, whose
-/// changes (current minus reference, as [`map::total_key`]s) are `keys` (reordered): the
-/// `(local_bins + 1)`-th largest (evidence of a rise) and the `(local_bins + 1)`-th smallest
-/// (of a fall). A local change covers at most `local_bins` bins, so it moves neither: only a
-/// change of most of the crossed bins does (over [`MOVE_BINS`] bins or more, the median is
-/// both). `None` for other `m`.
-fn short_levels(keys: &mut [i32], local_bins: usize) -> Option<(f32, f32)> {
-    let m = keys.len();
-    if m <= local_bins || m >= MOVE_BINS {
-        return None;
-    }
-    // Insertion sort: fewer than MOVE_BINS keys.
-    for a in 1..m {
-        let mut b = a;
-        while b > 0 && keys[b - 1] > keys[b] {
-            keys.swap(b - 1, b);
-            b -= 1;
-        }
-    }
-    let up = keys.get(m - 1 - local_bins)?;
-    let down = keys.get(local_bins)?;
-    Some((map::from_total_key(*up), map::from_total_key(*down)))
-}
 /// Judged bins a move must cross to give a level (a median of fewer is no travel level: a
 /// rough spot of up to `local_bins` would move it).
 pub const MOVE_BINS: usize = 9;
@@ -414,7 +312,6 @@ pub struct Monitor {
     /// hangs and follows only later).
     mass: [f32; N],
     residual: [ResidualWatch; N],
-    drift: [[DriftTest; 2]; N],
     sliding_for: [u32; N],
     last_dir: [Option<usize>; N],
     pending: [Option<Alarm>; 4],
@@ -480,7 +377,6 @@ impl Monitor {
             breakaway: [BreakawayWatch::default(); N],
             mass,
             residual: [ResidualWatch::default(); N],
-            drift: [[DriftTest::default(); 2]; N],
             sliding_for: [0; N],
             last_dir: [None; N],
             pending: [None; 4],
@@ -841,20 +737,7 @@ impl Monitor {
         if found.judged > 0 {
             c.pooled = found.sum / found.judged as f32;
         }
-        let m = found.below + found.above;
-        if m < MOVE_BINS {
-            // A shorter move: evidence for the drift test only, from statistics no local
-            // change moves.
-            let mut few = [0i32; MOVE_BINS];
-            let crossed = keys.iter().take(found.below);
-            let crossed = crossed.chain(keys.iter().skip(BINS - found.above));
-            for (slot, key) in few.iter_mut().zip(crossed) {
-                *slot = *key;
-            }
-            let local_bins = self.settings.local_bins;
-            if let Some((up, down)) = few.get_mut(..m).and_then(|f| short_levels(f, local_bins)) {
-                self.drift_test(i, dj, [up, down], true, learning);
-            }
+        if found.below + found.above < MOVE_BINS {
             return;
         }
         let level = median_of_split_keys(&mut keys, found.below, found.above);
@@ -868,16 +751,12 @@ impl Monitor {
             let w = if w > LEVEL_SLOW { w } else { LEVEL_SLOW };
             c.level_band += w * (level * level - c.level_band);
         }
-        if !learning && learned && !self.untracked(i) {
-            self.level_check(i, dj, level, inside);
+        if learning || !learned {
+            return;
         }
-        self.drift_test(i, dj, [level, level], false, learning);
-    }
-
-    /// The level check of a move over at least [`MOVE_BINS`] judged bins: its level [N]
-    /// outside the learned band (`inside` false) in two moves of this map in a row, of one
-    /// sign, raise a `friction_drift`; a level inside feeds the release.
-    fn level_check(&mut self, i: usize, dj: usize, level: f32, inside: bool) {
+        if self.untracked(i) {
+            return;
+        }
         let c = &mut self.checks[i][dj];
         // A drift is a change of one sign: a level out of band the other way from the last
         // one starts the confirmation again (measured: a clean hour on the independent plant
@@ -894,79 +773,6 @@ impl Monitor {
         }
     }
 
-    /// The drift's sequential test of axis `i` moving in direction `dj` (Page's CUSUM, one sum
-    /// per sign, [`DriftTest`]), fed by a move whose statistics are `x` [N] (evidence of a
-    /// rise, of a fall: a long move's level twice, or a `short` move's [`short_levels`]). The
-    /// level check asks for two moves in a row out of band, each against the level's second
-    /// moment about 0 (which holds the level's offset from its reference as well as its
-    /// scatter); this test measures each move against the level's learned mean and scatter,
-    /// sums the evidence of the map's moves, long or short, and a move between two out of
-    /// band does not start it again. (One test per axis over both directions was measured and
-    /// not kept: see [`DRIFT_LOG_ARL`].)
-    ///
-    /// A move's evidence is its log-likelihood ratio for a change of `2 drift_k` standard
-    /// deviations `sd` of the map's long-move level (Gaussian statistics), over `2 drift_k`:
-    /// with `z = (x - mean) / sd` against the learned mean and `w = sd^2 / var` the move's
-    /// weight, `w (z - drift_k)` for a rise and `w (-z - drift_k)` for a fall. A long move's
-    /// `var` is `sd^2` (`w = 1`). A short move's statistic is an order statistic of fewer bins,
-    /// on the conservative side of their median (below it for a rise, above it for a fall:
-    /// the long-move mean overstates neither), and its `var` the larger of `sd^2` and the mean
-    /// band of the map's judged bins (the scatter of one bin's passes: an order statistic of a
-    /// few bins scatters like one bin): it weighs less. Each sum keeps `max(0, sum +
-    /// evidence)` and raises `friction_drift` at `drift_h` ([`Settings::drift_h`]: the mean
-    /// run between false alarms from Wald's bound), then starts again. A move's evidence is
-    /// capped at half of `drift_h`: no single move decides (the level check's two moves, in
-    /// another form).
-    ///
-    /// The long-move statistics learn from every long move while commissioning and for their
-    /// first [`DRIFT_LEARN`] moves, then only from levels within `k` of their scatter while no
-    /// alarm of the map stands, with weight [`LEVEL_SLOW`]: a slow drift (5 %/h) is followed,
-    /// a change is not taught. Nothing learns or is judged while the twin does not track the
-    /// axis ([`Monitor::untracked`]).
-    fn drift_test(&mut self, i: usize, dj: usize, x: [f32; 2], short: bool, learning: bool) {
-        let (k, h) = (self.settings.drift_k, self.settings.drift_h);
-        let k2 = self.settings.k * self.settings.k;
-        let tracked = !self.untracked(i);
-        let c = &mut self.checks[i][dj];
-        let st = c.moves;
-        let judged = !learning && tracked && st.usable();
-        let var = if short && c.pooled > st.var {
-            c.pooled
-        } else {
-            st.var
-        };
-        let sd = if judged { sqrt_f32(st.var) } else { 0.0 };
-        let w = if var > 0.0 { st.var / var } else { 0.0 };
-        let change = [x[0] - st.mean, x[1] - st.mean];
-        if !short {
-            let standing = c.drift.standing() || c.local.standing();
-            let inside = change[0] * change[0] <= k2 * st.var;
-            if tracked && (learning || st.n < DRIFT_LEARN || (!standing && inside)) {
-                c.moves.learn(x[0]);
-            }
-        }
-        if !judged || sd <= 0.0 {
-            return;
-        }
-        let test = &mut self.drift[i][dj];
-        let mut raised = None;
-        for (s, sign) in [1.0f32, -1.0].into_iter().enumerate() {
-            let e = w * (sign * change[s] / sd - k);
-            let e = if e < 0.5 * h { e } else { 0.5 * h };
-            let sum = test.sum[s] + e;
-            test.sum[s] = if sum > 0.0 { sum } else { 0.0 };
-            if test.sum[s] >= h {
-                test.sum[s] = 0.0;
-                raised = Some(change[s]);
-            }
-        }
-        if let Some(change) = raised {
-            if self.checks[i][dj].drift.latch() {
-                self.raise(i, AlarmKind::FrictionDrift { change }, dir_of(dj));
-            }
-        }
-    }
-
     /// A local pattern: a few bins out of band against the travel's level and their
     /// neighbours, confirmed by a later pass over the same place (or by the other direction's
     /// map flagging the same place: a pass the other way is an independent one).
@@ -979,8 +785,7 @@ impl Monitor {
         // standing) the bins not yet revisited look local: judge no local pattern then.
         let moving = self.checks[i]
             .iter()
-            .any(|m| m.drift.pending() || m.drift.standing())
-            || self.drift[i].iter().any(|t| t.sum.iter().any(|s| *s > 0.0));
+            .any(|m| m.drift.pending() || m.drift.standing());
         let c = &mut self.checks[i][dj];
         if c.level_n == 0 || moving {
             return None;
