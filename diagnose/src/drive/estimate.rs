@@ -960,18 +960,23 @@ fn mean(v: &[f64]) -> f64 {
     }
 }
 
-/// Median (0 for an empty list).
+/// Median of the finite values (0 when there are none). Selection, not a sort: O(n) where
+/// a sort is O(n log n) (the estimate takes two medians of every sliding row, a million on a
+/// 10 kHz x 120 s log, for every candidate fitted: sorting them was a quarter of such a
+/// diagnosis). The value is the sort's, bit for bit (an order statistic is one of the values).
 pub fn median(mut v: Vec<f64>) -> f64 {
     v.retain(|x| x.is_finite());
-    if v.is_empty() {
+    let n = v.len();
+    if n == 0 {
         return 0.0;
     }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
+    let (lower, &mut mid, _) = v.select_nth_unstable_by(n / 2, f64::total_cmp);
     if n % 2 == 1 {
-        v[n / 2]
+        mid
     } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
+        // the largest of the lower half is the other middle value
+        let below = lower.iter().copied().max_by(f64::total_cmp).unwrap_or(mid);
+        0.5 * (below + mid)
     }
 }
 
@@ -987,6 +992,24 @@ pub fn std_dev(v: &[f64]) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_median_by_selection_is_the_sorted_median() {
+        let mut rng = crane_ident::rng::Rng::new(5);
+        for n in [1usize, 2, 3, 4, 7, 10, 101, 1000] {
+            let v: Vec<f64> = (0..n).map(|_| rng.range(-3.0, 3.0).round()).collect();
+            let mut s = v.clone();
+            s.sort_by(f64::total_cmp);
+            let want = if n % 2 == 1 {
+                s[n / 2]
+            } else {
+                0.5 * (s[n / 2 - 1] + s[n / 2])
+            };
+            assert_eq!(median(v).to_bits(), want.to_bits(), "n {n}");
+        }
+        assert_eq!(median(vec![f64::NAN, 2.0, f64::INFINITY, 1.0]), 1.5);
+        assert_eq!(median(Vec::new()), 0.0);
+    }
 
     #[test]
     fn a_fractional_delay_reads_the_mean_of_a_held_input_over_the_period() {
