@@ -533,57 +533,61 @@ pub fn axis_run(
         notes: Vec::new(),
     };
     if let TimeBase::Irregular(why) = tb {
-        let h = why.grid_step_s;
-        let (grid, rows) = timebase::zoh_rows(&out.t, h);
-        let rows_in = out.t.len();
-        // a position seen fresh on every row is read at the grid instants and the inputs are
-        // averaged over each grid period (no lag between them, and no stamp jitter in the
-        // position: a 15 ms jittered log's zero-order hold made the inertia 60 times low);
-        // any other position (held, filled into empty fields, or one whose holds cannot be
-        // told from single counts: interpolating its stale rows would pass them for motion),
-        // and a closed loop's signals, keep the rows' zero-order hold (a held channel is
-        // rebuilt from its fresh rows later, and a loop's reference and input belong to one
-        // row). Tried and not kept: a position given on some rows of an asynchronous log
-        // (empty fields elsewhere) interpolated between them; its derivative window then no
-        // longer saw the held channel's refresh (a 5 kHz log's dead band went from 0.43 % to
-        // 6.2 % held-out error)
-        let exact = !x_blank && out.closed_loop.is_none() && timebase::fresh_every_row(&out.x);
-        out = if exact {
-            AxisRun {
-                source_t: grid.clone(),
-                x: timebase::interpolate(&out.t, &out.x, &grid),
-                force: timebase::hold_mean(&out.t, &out.force, &grid, h),
-                u: timebase::hold_mean(&out.t, &out.u, &grid, h),
-                t: grid,
-                ..out
-            }
-        } else {
-            AxisRun {
-                source_t: timebase::pick(&out.t, &rows),
-                t: grid,
-                x: timebase::pick(&out.x, &rows),
-                force: timebase::pick(&out.force, &rows),
-                u: timebase::pick(&out.u, &rows),
-                closed_loop: out.closed_loop.map(|c| LoopSignals {
-                    reference: timebase::pick(&c.reference, &rows),
-                    added_input: timebase::pick(&c.added_input, &rows),
-                }),
-                ..out
-            }
-        };
-        notes.insert(
-            0,
-            LoadNote::Resampled {
-                why,
-                rows_in,
-                rows_out: rows.len(),
-                step_s: h,
-                exact,
-            },
-        );
+        let (resampled, note) = resample(out, why, x_blank);
+        out = resampled;
+        notes.insert(0, note);
     }
     out.notes = notes;
     Ok(out)
+}
+
+/// Resamples a run read at irregular instants onto the uniform grid of `why.grid_step_s`, and
+/// the note that says how. A position seen fresh on every row is read at the grid instants
+/// (linear interpolation) and the inputs are averaged over each grid period (no lag between
+/// them, and no stamp jitter in the position: a 15 ms jittered log's zero-order hold made the
+/// inertia 60 times low). Any other position (held, filled into empty fields: `x_blank`, or
+/// one whose holds cannot be told from single counts: interpolating its stale rows would pass
+/// them for motion), and a closed loop's signals, keep the rows' zero-order hold (a held
+/// channel is rebuilt from its fresh rows later, and a loop's reference and input belong to
+/// one row). Tried and not kept: a position given on some rows of an asynchronous log (empty
+/// fields elsewhere) interpolated between them; its derivative window then no longer saw the
+/// held channel's refresh (a 5 kHz log's dead band went from 0.43 % to 6.2 % held-out error).
+fn resample(out: AxisRun, why: Irregularity, x_blank: bool) -> (AxisRun, LoadNote) {
+    let h = why.grid_step_s;
+    let (grid, rows) = timebase::zoh_rows(&out.t, h);
+    let rows_in = out.t.len();
+    let exact = !x_blank && out.closed_loop.is_none() && timebase::fresh_every_row(&out.x);
+    let run = if exact {
+        AxisRun {
+            source_t: grid.clone(),
+            x: timebase::interpolate(&out.t, &out.x, &grid),
+            force: timebase::hold_mean(&out.t, &out.force, &grid, h),
+            u: timebase::hold_mean(&out.t, &out.u, &grid, h),
+            t: grid,
+            ..out
+        }
+    } else {
+        AxisRun {
+            source_t: timebase::pick(&out.t, &rows),
+            t: grid,
+            x: timebase::pick(&out.x, &rows),
+            force: timebase::pick(&out.force, &rows),
+            u: timebase::pick(&out.u, &rows),
+            closed_loop: out.closed_loop.map(|c| LoopSignals {
+                reference: timebase::pick(&c.reference, &rows),
+                added_input: timebase::pick(&c.added_input, &rows),
+            }),
+            ..out
+        }
+    };
+    let note = LoadNote::Resampled {
+        why,
+        rows_in,
+        rows_out: rows.len(),
+        step_s: h,
+        exact,
+    };
+    (run, note)
 }
 
 impl Table {

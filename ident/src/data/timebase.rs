@@ -234,6 +234,25 @@ pub fn zoh_rows(t: &[f64], h: f64) -> (Vec<f64>, Vec<usize>) {
 /// step: at 0.05 m/s and a 15 ms step 0.75 mm, many encoder counts). `t` strictly
 /// increasing, `grid` non-decreasing from `t[0]`. Work O(rows + grid).
 pub fn interpolate(t: &[f64], c: &[f64], grid: &[f64]) -> Vec<f64> {
+    at_grid(t, c, grid, |j, n, g| {
+        if j + 1 >= n || g <= t[j] {
+            return c[j];
+        }
+        let f = (g - t[j]) / (t[j + 1] - t[j]);
+        c[j] + (c[j + 1] - c[j]) * f
+    })
+}
+
+/// One value per `grid` instant `g` from `read(j, n, g)`, `j` the last of the `n` usable rows
+/// at or before `g` (the first row before `t[0]`): the row cursor of [`interpolate`] and
+/// [`hold_mean`], which moves forward only (`grid` non-decreasing), so the work is
+/// O(rows + grid). NaN for every instant of an empty signal.
+fn at_grid(
+    t: &[f64],
+    c: &[f64],
+    grid: &[f64],
+    mut read: impl FnMut(usize, usize, f64) -> f64,
+) -> Vec<f64> {
     let n = t.len().min(c.len());
     if n == 0 {
         return vec![f64::NAN; grid.len()];
@@ -244,11 +263,7 @@ pub fn interpolate(t: &[f64], c: &[f64], grid: &[f64]) -> Vec<f64> {
             while j + 1 < n && t[j + 1] <= g {
                 j += 1;
             }
-            if j + 1 >= n || g <= t[j] {
-                return c[j];
-            }
-            let f = (g - t[j]) / (t[j + 1] - t[j]);
-            c[j] + (c[j + 1] - c[j]) * f
+            read(j, n, g)
         })
         .collect()
 }
@@ -260,28 +275,18 @@ pub fn interpolate(t: &[f64], c: &[f64], grid: &[f64]) -> Vec<f64> {
 /// up. Beyond the last row its value is held. `t` strictly increasing, `grid` increasing from
 /// `t[0]` by `h > 0`; NaN for an empty signal. Work O(rows + grid).
 pub fn hold_mean(t: &[f64], c: &[f64], grid: &[f64], h: f64) -> Vec<f64> {
-    let n = t.len().min(c.len());
-    if n == 0 {
-        return vec![f64::NAN; grid.len()];
-    }
-    let mut j = 0;
-    grid.iter()
-        .map(|&g| {
-            let end = g + h;
-            while j + 1 < n && t[j + 1] <= g {
-                j += 1;
-            }
-            // the row in force at g, then every row starting inside the period
-            let (mut area, mut from, mut k) = (0.0, g, j);
-            while k + 1 < n && t[k + 1] < end {
-                area += c[k] * (t[k + 1] - from);
-                from = t[k + 1];
-                k += 1;
-            }
-            area += c[k] * (end - from);
-            area / h
-        })
-        .collect()
+    at_grid(t, c, grid, |j, n, g| {
+        let end = g + h;
+        // the row in force at g, then every row starting inside the period
+        let (mut area, mut from, mut k) = (0.0, g, j);
+        while k + 1 < n && t[k + 1] < end {
+            area += c[k] * (t[k + 1] - from);
+            from = t[k + 1];
+            k += 1;
+        }
+        area += c[k] * (end - from);
+        area / h
+    })
 }
 
 /// Picks `rows` of a column.
@@ -295,15 +300,27 @@ pub fn pick(c: &[f64], rows: &[usize]) -> Vec<f64> {
 /// few rows never does. A channel that changes less often than its rows (a fine encoder's
 /// slow motion, or a hold [`held_channel`] cannot tell from one: single counts) is not.
 pub fn fresh_every_row(c: &[f64]) -> bool {
+    let (_, gaps) = changes_and_gaps(c);
+    gaps.len() >= HELD_MIN_CHANGES && consecutive(&gaps)
+}
+
+/// The rows where a channel changes, and the gaps between consecutive changes [rows] that are
+/// refreshes, not rests (at most [`HELD_MAX_REFRESH_ROWS`]).
+fn changes_and_gaps(c: &[f64]) -> (Vec<usize>, Vec<usize>) {
     let changes: Vec<usize> = (1..c.len()).filter(|&k| c[k] != c[k - 1]).collect();
-    let gaps: Vec<usize> = changes
+    let gaps = changes
         .windows(2)
         .map(|w| w[1] - w[0])
         .filter(|&g| g <= HELD_MAX_REFRESH_ROWS)
         .collect();
-    let consecutive = gaps.iter().filter(|&&g| g == 1).count();
-    gaps.len() >= HELD_MIN_CHANGES
-        && consecutive as f64 > HELD_MAX_CONSECUTIVE_SHARE * gaps.len() as f64
+    (changes, gaps)
+}
+
+/// Whether more than [`HELD_MAX_CONSECUTIVE_SHARE`] of the `gaps` are of one row: a channel
+/// fresh on every row (at least at times).
+fn consecutive(gaps: &[usize]) -> bool {
+    let ones = gaps.iter().filter(|&&g| g == 1).count();
+    ones as f64 > HELD_MAX_CONSECUTIVE_SHARE * gaps.len() as f64
 }
 
 /// Whether a channel is held (refreshed every few rows): `Some((rows_per_refresh,
@@ -313,20 +330,8 @@ pub fn held_channel(c: &[f64]) -> Option<(usize, f64)> {
     if c.len() < 3 {
         return None;
     }
-    let changes: Vec<usize> = (1..c.len()).filter(|&k| c[k] != c[k - 1]).collect();
-    if changes.len() < HELD_MIN_CHANGES {
-        return None;
-    }
-    let mut gaps: Vec<usize> = changes
-        .windows(2)
-        .map(|w| w[1] - w[0])
-        .filter(|&g| g <= HELD_MAX_REFRESH_ROWS)
-        .collect();
-    if gaps.len() < HELD_MIN_CHANGES {
-        return None;
-    }
-    let consecutive = gaps.iter().filter(|&&g| g == 1).count();
-    if consecutive as f64 > HELD_MAX_CONSECUTIVE_SHARE * gaps.len() as f64 {
+    let (changes, mut gaps) = changes_and_gaps(c);
+    if changes.len() < HELD_MIN_CHANGES || gaps.len() < HELD_MIN_CHANGES || consecutive(&gaps) {
         return None;
     }
     let deltas: Vec<f64> = changes.iter().map(|&k| (c[k] - c[k - 1]).abs()).collect();
