@@ -26,7 +26,7 @@ fn example(name: &str) -> Option<PathBuf> {
 
 fn run(name: &str) -> Option<(Report, PathBuf)> {
     let dir = example(name)?;
-    let plots = std::env::temp_dir().join(format!("crane_cicese_{name}_{}", std::process::id()));
+    let plots = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("cicese_{name}"));
     let _ = std::fs::remove_dir_all(&plots);
     let opts = DiagnoseOptions {
         plots_dir: Some(plots.clone()),

@@ -146,7 +146,8 @@ fn emps_closed_loop_plots_are_written() {
     if crane_ident::shared_data::require("emps").is_none() {
         return;
     }
-    let dir = std::env::temp_dir().join(format!("crane-diagnose-emps-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("diagnose-emps");
+    let _ = std::fs::remove_dir_all(&dir);
     let o = DiagnoseOptions {
         baseline: Baseline::Symmetric,
         plots_dir: Some(dir.clone()),

@@ -92,7 +92,7 @@ fn pulse_log(rng: &mut Rng, truth: &DriveParams, dt: f64, q: f64) -> Log {
 fn tmp(name: &str) -> PathBuf {
     static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     let k = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    std::env::temp_dir().join(format!("crane_messy_{}_{k}_{name}", std::process::id()))
+    std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("messy_{k}_{name}"))
 }
 
 /// Writes the runs (time stamps from 0 at each run's own rate) with this `dataset.toml`

@@ -176,7 +176,7 @@ fn example(name: &str, data: &str) -> Option<PathBuf> {
 /// Writes the transformed data set (CSV + `dataset.toml`) into a fresh temporary directory.
 fn write_transformed(src: &Path, tr: Transform, tag: &str) -> PathBuf {
     let ds = load_dataset(src).expect("example loads");
-    let dir = std::env::temp_dir().join(format!("crane_transform_{tag}_{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("transform_{tag}"));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let first = ds.runs[0].axis().expect("single-axis data");

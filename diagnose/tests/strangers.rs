@@ -719,7 +719,7 @@ fn seed_offset() -> u64 {
 }
 
 fn dir_for(name: &str) -> PathBuf {
-    std::env::temp_dir().join(format!("crane_strangers_{}_{name}", std::process::id()))
+    std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("strangers_{name}"))
 }
 
 fn causes(r: &Report) -> Vec<Cause> {

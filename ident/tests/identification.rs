@@ -49,7 +49,7 @@ fn curve_quality(fit: &DryFit, truth: &[f64; 5]) -> CurveQuality {
 }
 
 fn temp_dir(tag: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("crane-ident-{}-{tag}", std::process::id()));
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("ident-{tag}"));
     let _ = std::fs::remove_dir_all(&d);
     d
 }

@@ -134,11 +134,9 @@ fn apply(bytes: &mut Vec<u8>, m: &Mutation) {
 }
 
 fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!(
-        "crane-ident-fuzz-{}-{}",
-        std::process::id(),
-        N.fetch_add(1, Ordering::SeqCst)
-    ));
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("ident-fuzz-{}", N.fetch_add(1, Ordering::SeqCst)));
+    let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
 }

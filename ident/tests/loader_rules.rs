@@ -13,9 +13,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 static N: AtomicUsize = AtomicUsize::new(0);
 
 fn temp_dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!(
-        "crane-ident-rules-{}-{}-{}",
-        std::process::id(),
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
+        "ident-rules-{}-{}",
         tag,
         N.fetch_add(1, Ordering::SeqCst)
     ));

@@ -6,10 +6,9 @@ use crane_ident::emps::{cross_test, idim_ls, IdimModel, IdimOptions};
 use std::fmt::Write as _;
 
 fn run_at(rate_hz: f64, n: usize) -> AxisRun {
-    let d = std::env::temp_dir().join(format!(
-        "crane-ident-slow-{}-{rate_hz}-{n}",
-        std::process::id()
-    ));
+    let d =
+        std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("ident-slow-{rate_hz}-{n}"));
+    let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     let mut s = String::from("t,x,u\n");
     for k in 0..n {
@@ -51,7 +50,7 @@ fn crane_identification_at_20_hz_does_not_panic() {
     use crane_ident::campaign::{run_campaign, Campaign};
     use crane_ident::data::Constants;
     use crane_ident::rig::{PlantConfig, VirtualRig};
-    let d = std::env::temp_dir().join(format!("crane-ident-slow-crane-{}", std::process::id()));
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("ident-slow-crane");
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     let mut rig = VirtualRig::new(crane_model::Params::default(), PlantConfig::default());

@@ -6,14 +6,14 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-/// A fresh, empty scratch folder for the test `name`: `crane-<test file>-<pid>-<name>` in the
-/// system's temporary folder (anything there from an earlier run is removed first).
+/// A fresh, empty scratch folder for the test `name`: `<test file>-<name>` in Cargo's
+/// scratch folder for integration tests (`target/tmp`, `CARGO_TARGET_TMPDIR`), not the
+/// system's: anything there from an earlier run is removed first, so runs reuse one folder
+/// per test instead of leaving one per process behind (a `demo` folder is 176 MB), and a
+/// failed test's files stay there to be looked at until the next run.
 pub fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!(
-        "crane-{}-{}-{name}",
-        env!("CARGO_CRATE_NAME"),
-        std::process::id()
-    ));
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("{}-{name}", env!("CARGO_CRATE_NAME"),));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).expect("temp dir");
     d
