@@ -318,10 +318,18 @@ fn drive_runs(
                 r.name
             )));
         }
-        // a position channel refreshed every few rows is rebuilt between its fresh samples
-        let refresh = crane_ident::data::timebase::held_channel(&a.x).map_or(1, |(r, _)| r);
-        let x = drive::prep::unhold(&a.x, refresh);
-        let read_at = drive::prep::read_instants(&a.x, &a.source_t, refresh);
+        // a position channel refreshed every few rows is rebuilt between its fresh samples,
+        // here, or by the loader from the rows that gave it (`x_refresh`: one sample in
+        // `x_refresh` carries news, taken as read every `x_refresh` samples)
+        let (refresh, x, read_at) = if a.x_refresh > 1 {
+            let every = |k: usize| a.source_t[k - k % a.x_refresh];
+            let read_at = (0..a.source_t.len()).map(every).collect();
+            (a.x_refresh, a.x.clone(), read_at)
+        } else {
+            let refresh = crane_ident::data::timebase::held_channel(&a.x).map_or(1, |(r, _)| r);
+            let read_at = drive::prep::read_instants(&a.x, &a.source_t, refresh);
+            (refresh, drive::prep::unhold(&a.x, refresh), read_at)
+        };
         // instants from the cut's first sample
         let from = |v: &[f64], lo: usize, hi: usize| -> Vec<f64> {
             let t0 = a.t.get(lo).copied().unwrap_or(0.0);

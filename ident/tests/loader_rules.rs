@@ -609,12 +609,54 @@ fn asynchronous_logs_with_empty_fields_are_merged_and_held() {
     // before resampling (the merged stamps are irregular): the instant 0.09 carries both of
     // its rows' values, each empty field its column's last value
     let table = parse_table(Path::new("async.csv"), &s).unwrap();
-    let (m, _) = fill_blanks(&table, 0, &[1, 2]).unwrap();
+    let (m, _, _) = fill_blanks(&table, 0, &[1, 2]).unwrap();
     let k = m.columns[0].iter().position(|&t| t == 0.09).unwrap();
     assert_eq!((m.columns[1][k], m.columns[2][k]), (9.0 * 1e-3, 7.0));
     assert_eq!(m.lines[k], 13, "the merged row's line is its first row's");
     let k = m.columns[0].iter().position(|&t| t == 0.065).unwrap();
     assert_eq!((m.columns[1][k], m.columns[2][k]), (6.0 * 1e-3, 2.0));
+}
+
+/// An asynchronous log with jittered stamps whose position comes on some rows only (empty
+/// fields elsewhere): the position is read at the grid instants between the rows that gave
+/// it, not held from the last of them (which reads it up to a refresh late), and the run says
+/// how many grid samples one given position spans (`x_refresh`, for derivative windows).
+#[test]
+fn a_position_given_on_some_rows_is_interpolated_between_them() {
+    let mut s = String::from("t,x,u\n");
+    // rows every 5 ms +- 1.5 ms; x (a ramp, 0.2 m/s) on every 4th row, u on every 3rd
+    let mut given = Vec::new();
+    for k in 0..400 {
+        let t = k as f64 * 0.005 + [0.0, 0.0015, -0.001, 0.0007][k % 4] + 0.002;
+        let x = (k % 4 == 0).then_some(0.2 * t);
+        let u = (k % 3 == 0).then_some(k as f64);
+        if x.is_none() && u.is_none() {
+            continue;
+        }
+        if let Some(x) = x {
+            given.push((t, x));
+        }
+        let f = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
+        let _ = writeln!(s, "{t},{},{}", f(x), f(u));
+    }
+    let ds = ok("", &s);
+    let a = ds.runs[0].axis().unwrap();
+    assert!(
+        a.notes
+            .iter()
+            .any(|n| matches!(n, LoadNote::Resampled { exact: true, .. })),
+        "{:?}",
+        a.notes
+    );
+    let last = given.last().unwrap().0;
+    for (k, &g) in a.t.iter().enumerate() {
+        let want = 0.2 * g.min(last);
+        assert!((a.x[k] - want).abs() < 1e-12, "{k}: {} {want}", a.x[k]);
+        assert_eq!(a.source_t[k], g);
+    }
+    let per_given = a.t.len() as f64 / given.len() as f64;
+    assert!(per_given > 1.5, "{per_given}");
+    assert_eq!(a.x_refresh, per_given.round() as usize);
 }
 
 #[test]

@@ -24,7 +24,9 @@ pub struct DriveRun {
     /// Input [input units], applied over each sample (zero-order hold).
     pub u: Vec<f64>,
     /// Rows per fresh sample of the position channel (1: every row is fresh; more when the
-    /// logger repeats `x` between refreshes, and `x` is then [`unhold`]'s reconstruction).
+    /// logger repeats `x` between refreshes, and `x` is then [`unhold`]'s reconstruction, or
+    /// when the loader interpolated a position given on fewer rows:
+    /// `crane_ident::data::AxisRun::x_refresh`).
     pub refresh: usize,
     /// Per sample, when its input was taken [s from the run's first sample]: the sample's own
     /// instant `k dt`, or for a log resampled by zero-order hold the stamp of the file row it

@@ -37,6 +37,12 @@ pub struct Filled {
     pub held: Vec<(String, usize)>,
 }
 
+/// Per used column (its index in the table), for each row [`fill_blanks`] put out whether
+/// the file gave the value (`false`: an empty field filled by the last value): when each
+/// value was taken, for a resampling that reads a position between the instants it was
+/// given.
+pub type Given = Vec<(usize, Vec<bool>)>;
+
 impl fmt::Display for Filled {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
@@ -62,13 +68,14 @@ impl fmt::Display for Filled {
 }
 
 /// One complete row per instant from `table` (see the module doc): `t` is the index of the
-/// time column, `used` those of the columns the run reads. `Ok((table, None))` when nothing
-/// needed doing.
+/// time column, `used` those of the columns the run reads. `Ok((table, None, given))` when
+/// nothing needed doing (`given` then empty), else the note and which rows gave each used
+/// column's value ([`Given`]).
 pub fn fill_blanks(
     table: &Table,
     t: usize,
     used: &[usize],
-) -> Result<(Table, Option<Filled>), DataError> {
+) -> Result<(Table, Option<Filled>, Given), DataError> {
     let tc = &table.columns[t];
     let at = |row: usize, col: usize, p: Problem| {
         err(
@@ -86,7 +93,7 @@ pub fn fill_blanks(
         .any(|&c| table.columns[c].iter().any(|v| v.is_nan()));
     let repeats = tc.windows(2).any(|w| w[0] == w[1]);
     if !blanks && !repeats {
-        return Ok((table.clone(), None));
+        return Ok((table.clone(), None, Vec::new()));
     }
     let rows_in = table.len();
     let cols: Vec<usize> = std::iter::once(t)
@@ -149,6 +156,7 @@ pub fn fill_blanks(
     // 2. hold the last value over empty fields (the values of the dropped groups included)
     let mut last: Vec<f64> = vec![f64::NAN; cols.len()];
     let mut held = vec![0usize; cols.len()];
+    let mut given: Vec<Vec<bool>> = vec![Vec::with_capacity(groups.len() - start); cols.len()];
     let mut out = Table {
         file: table.file.clone(),
         header: table.header.clone(),
@@ -168,6 +176,7 @@ pub fn fill_blanks(
         }
         for (j, &c) in cols.iter().enumerate() {
             out.columns[c].push(last[j]);
+            given[j].push(!g.vals[j].is_nan());
         }
         // columns the run does not read keep the group's first row (blank or not)
         for c in (0..table.header.len()).filter(|c| !cols.contains(c)) {
@@ -187,5 +196,6 @@ pub fn fill_blanks(
             .map(|(j, &c)| (clip(&table.header[c]), held[j]))
             .collect(),
     };
-    Ok((out, Some(note)))
+    let given = cols.iter().copied().zip(given).skip(1).collect();
+    Ok((out, Some(note), given))
 }

@@ -98,6 +98,12 @@ pub struct AxisRun {
     pub source_t: Vec<f64>,
     /// Position [m or rad: `position_unit`].
     pub x: Vec<f64>,
+    /// Samples per fresh position sample when the loader interpolated a position given on
+    /// fewer rows than the grid has samples (an asynchronous log's empty fields): the
+    /// information `x` carries is that of one sample in `x_refresh`, and derivative windows
+    /// must span it. 0 or 1: every sample is fresh, or a held channel is still visible in
+    /// `x` (its repeats: `timebase::held_channel`).
+    pub x_refresh: usize,
     /// Drive effort `gain * u` [N or N m] when the gain is known, else `u` itself [input
     /// units].
     pub force: Vec<f64>,
@@ -141,6 +147,7 @@ impl AxisRun {
             t: cut(&self.t),
             source_t: cut(&self.source_t),
             x: cut(&self.x),
+            x_refresh: self.x_refresh,
             force: cut(&self.force),
             u: cut(&self.u),
             position_unit: self.position_unit,
@@ -427,16 +434,17 @@ fn note_fast_positions(runs: &mut [Run]) {
 /// Reads a single-axis run: `t`, `x` and either `force` (an effort: N or N m, gain 1) or `u`
 /// in `ds.input_unit` with the run's gain; with a declared controller, its reference and
 /// added-input columns. Irregular time stamps are resampled or refused, held channels noted
-/// (`timebase`): a position seen fresh on every row ([`timebase::fresh_every_row`], and not
-/// `x_blank`: empty fields filled by the last value) is interpolated at the grid instants,
-/// and the inputs averaged over each grid period; otherwise, and in a closed loop, every
-/// channel takes its last row at or before each instant (zero-order hold).
+/// (`timebase`): a position seen fresh on every row ([`timebase::fresh_every_row`]), or given
+/// on the rows `x_given` marks (an asynchronous log whose empty fields were filled by the
+/// last value), is interpolated at the grid instants between the rows that gave it, and the
+/// inputs averaged over each grid period; otherwise, and in a closed loop, every channel
+/// takes its last row at or before each instant (zero-order hold).
 pub fn axis_run(
     table: &Table,
     renames: &BTreeMap<String, String>,
     ds: &DatasetSpec,
     run: Option<&RunSpec>,
-    x_blank: bool,
+    x_given: Option<&[bool]>,
 ) -> Result<AxisRun, DataError> {
     let (t, tb) = time_base(table, renames)?;
     let position_unit = ds.position_unit;
@@ -524,6 +532,7 @@ pub fn axis_run(
         source_t: t.clone(),
         t,
         x,
+        x_refresh: 0,
         force,
         u,
         position_unit,
@@ -533,7 +542,7 @@ pub fn axis_run(
         notes: Vec::new(),
     };
     if let TimeBase::Irregular(why) = tb {
-        let (resampled, note) = resample(out, why, x_blank);
+        let (resampled, note) = resample(out, why, x_given);
         out = resampled;
         notes.insert(0, note);
     }
@@ -542,25 +551,46 @@ pub fn axis_run(
 }
 
 /// Resamples a run read at irregular instants onto the uniform grid of `why.grid_step_s`, and
-/// the note that says how. A position seen fresh on every row is read at the grid instants
-/// (linear interpolation) and the inputs are averaged over each grid period (no lag between
-/// them, and no stamp jitter in the position: a 15 ms jittered log's zero-order hold made the
-/// inertia 60 times low). Any other position (held, filled into empty fields: `x_blank`, or
-/// one whose holds cannot be told from single counts: interpolating its stale rows would pass
-/// them for motion), and a closed loop's signals, keep the rows' zero-order hold (a held
-/// channel is rebuilt from its fresh rows later, and a loop's reference and input belong to
-/// one row). Tried and not kept: a position given on some rows of an asynchronous log (empty
-/// fields elsewhere) interpolated between them; its derivative window then no longer saw the
-/// held channel's refresh (a 5 kHz log's dead band went from 0.43 % to 6.2 % held-out error).
-fn resample(out: AxisRun, why: Irregularity, x_blank: bool) -> (AxisRun, LoadNote) {
+/// the note that says how. A position seen fresh on every row, or given on the rows `x_given`
+/// marks (an asynchronous log's empty fields, filled by the last value before), is read at
+/// the grid instants by linear interpolation between the rows that gave it, and the inputs
+/// are averaged over each grid period (no lag between them, and no stamp jitter in the
+/// position: a 15 ms jittered log's zero-order hold made the inertia 60 times low; an 85 ms
+/// delay read as 70 ms on a log with x on every 4th row). The run's `x_refresh` is then the
+/// grid samples per given position (what derivative windows must span: without it a 5 kHz
+/// log's dead band went from 0.43 % to 6.2 % held-out error). Any other position (repeated
+/// between refreshes, or one whose holds cannot be told from single counts: interpolating its
+/// stale rows would pass them for motion), and a closed loop's signals, keep the rows'
+/// zero-order hold (a held channel is rebuilt from its fresh rows later, and a loop's
+/// reference and input belong to one row).
+fn resample(out: AxisRun, why: Irregularity, x_given: Option<&[bool]>) -> (AxisRun, LoadNote) {
     let h = why.grid_step_s;
     let (grid, rows) = timebase::zoh_rows(&out.t, h);
     let rows_in = out.t.len();
-    let exact = !x_blank && out.closed_loop.is_none() && timebase::fresh_every_row(&out.x);
+    let exact = out.closed_loop.is_none()
+        && match x_given {
+            Some(g) => g.len() == out.t.len() && g.iter().filter(|&&g| g).count() >= 2,
+            None => timebase::fresh_every_row(&out.x),
+        };
     let run = if exact {
+        // the rows that gave the position (all of them when none was filled), and the grid
+        // samples per given one
+        let (tg, xg): (Vec<f64>, Vec<f64>) = match x_given {
+            Some(g) => out
+                .t
+                .iter()
+                .zip(&out.x)
+                .zip(g)
+                .filter(|(_, &g)| g)
+                .map(|((&t, &x), _)| (t, x))
+                .unzip(),
+            None => (out.t.clone(), out.x.clone()),
+        };
+        let x_refresh = (grid.len() as f64 / tg.len().max(1) as f64).round() as usize;
         AxisRun {
             source_t: grid.clone(),
-            x: timebase::interpolate(&out.t, &out.x, &grid),
+            x: timebase::interpolate(&tg, &xg, &grid),
+            x_refresh,
             force: timebase::hold_mean(&out.t, &out.force, &grid, h),
             u: timebase::hold_mean(&out.t, &out.u, &grid, h),
             t: grid,
@@ -641,11 +671,7 @@ pub fn load_run(dir: &Path, ds: &DatasetSpec, spec: &RunSpec) -> Result<Run, Dat
             }
         }
         // an asynchronous log (empty fields, rows at one stamp): one complete row per instant
-        let mut filled = None;
-        // whether some row leaves the position empty (then filled by the last value)
-        let x_blank = table
-            .find("x", &renames)
-            .is_some_and(|c| table.columns[c].iter().any(|v| v.is_nan()));
+        let (mut filled, mut given) = (None, Vec::new());
         if let Some(t) = table.find("t", &renames) {
             let ident = BTreeMap::new();
             let mut used: Vec<usize> = ["x", "u", "force"]
@@ -658,11 +684,15 @@ pub fn load_run(dir: &Path, ds: &DatasetSpec, spec: &RunSpec) -> Result<Run, Dat
                     used.extend(table.find(a, &ident));
                 }
             }
-            let (t2, note) = asynchronous::fill_blanks(&table, t, &used)?;
-            table = t2;
-            filled = note;
+            (table, filled, given) = asynchronous::fill_blanks(&table, t, &used)?;
         }
-        let mut axis = axis_run(&table, &renames, ds, Some(spec), x_blank)?;
+        // the rows that gave the position, when some left it empty
+        let x_col = table.find("x", &renames);
+        let x_given = given
+            .iter()
+            .find(|(c, g)| Some(*c) == x_col && g.iter().any(|&g| !g))
+            .map(|(_, g)| g.as_slice());
+        let mut axis = axis_run(&table, &renames, ds, Some(spec), x_given)?;
         if let Some(f) = filled {
             axis.notes.insert(0, LoadNote::Filled(f));
         }
