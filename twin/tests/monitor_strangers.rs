@@ -22,8 +22,8 @@ use crane_model::{Axis, Direction, Mode, Params, State};
 use crane_twin::logic::control::{Controller, Io, IoError, LoopConfig, Move, Trajectory};
 use crane_twin::logic::monitor::alarm::Alarm;
 use crane_twin::logic::monitor::map::BINS;
-use crane_twin::logic::observer::Observer;
 use crane_twin::logic::monitor::{Monitor, Settings};
+use crane_twin::logic::observer::Observer;
 use rig::Fault as RigFault;
 use stranger_crane::{Config, Fault, StrangerCrane};
 
@@ -213,6 +213,9 @@ fn run(fault: Fault, seed: u64, onset: f64, duration: f64, until_ready: bool) ->
         }
         io.wait();
     }
+    if let Some(i) = inspect {
+        i.header(duration, &monitor);
+    }
     out
 }
 
@@ -261,7 +264,10 @@ impl Inspect {
 
     fn before(&self, m: &Monitor) -> Levels {
         let l = |a: Axis, d: usize| m.level(a, dir_of(d)).unwrap_or_default();
-        [[l(Axis::X, 0), l(Axis::X, 1)], [l(Axis::Y, 0), l(Axis::Y, 1)]]
+        [
+            [l(Axis::X, 0), l(Axis::X, 1)],
+            [l(Axis::Y, 0), l(Axis::Y, 1)],
+        ]
     }
 
     /// Judged bins of a map between `a` and `b` [m], and the map's judged bins in all.
@@ -334,8 +340,9 @@ impl Inspect {
         self.last_x = x_true;
     }
 
+    /// The coverage and levels of the four maps at `t` [s] (the onset, and the run's end).
     fn header(&self, t: f64, m: &Monitor) {
-        println!("    inspect from {t:.1} s: ready {}", m.ready());
+        println!("    inspect at {t:.1} s: ready {}", m.ready());
         for axis in [Axis::X, Axis::Y] {
             for d in 0..2 {
                 let c = m.coverage(axis, dir_of(d)).unwrap_or_default();
@@ -375,7 +382,11 @@ impl Inspect {
             ));
         }
         let sign = |d: usize| if d == 1 { '+' } else { '-' };
-        println!("    t {t:.1} after move X{} (passes {}):{row}", sign(d), self.passes);
+        println!(
+            "    t {t:.1} after move X{} (passes {}):{row}",
+            sign(d),
+            self.passes
+        );
         for e in 0..2 {
             if let Some(l) = m.local_state(Axis::X, dir_of(e)) {
                 let out: Vec<String> = (0..BINS)
