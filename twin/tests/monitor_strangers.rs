@@ -10,14 +10,20 @@
 //! table of `twin/README.md` (`cargo test --release -p crane-twin --test monitor_strangers --
 //! --nocapture`); `STRANGER_ONLY=TEXT` runs the scenarios whose name contains TEXT, and
 //! `STRANGER_PRINT=1` prints every alarm and the share of periods in which X's map was judged.
+//! `STRANGER_INSPECT=S` prints the monitor's internals from the onset for `S` seconds
+//! ([`Inspect`]): the coverage and levels at the onset, every move of X and Y (its span, the
+//! judged bins it crossed, the level it gave against the level's learned scatter), and at
+//! every pass over the bump the bins of X's maps around it against their bands.
 #[path = "support/monitor_rig.rs"]
 mod rig;
 mod stranger_crane;
 
-use crane_model::{Axis, Params, State};
+use crane_model::{Axis, Direction, Mode, Params, State};
 use crane_twin::logic::control::{Controller, Io, IoError, LoopConfig, Move, Trajectory};
 use crane_twin::logic::monitor::alarm::Alarm;
+use crane_twin::logic::monitor::map::BINS;
 use crane_twin::logic::monitor::{Monitor, Settings};
+use crane_twin::logic::observer::Observer;
 use rig::Fault as RigFault;
 use stranger_crane::{Config, Fault, StrangerCrane};
 
@@ -177,12 +183,17 @@ fn run(fault: Fault, seed: u64, onset: f64, duration: f64, until_ready: bool) ->
         judged: [[0; 2]; 2],
     };
     let mut last_x = q[0];
+    let mut inspect = Inspect::from_env(onset, bump);
     for k in 0..(duration / cfg.period) as u64 {
         let t = k as f64 * cfg.period;
         let r = op.reference(t).at::<f64>(t);
         let p = ctrl.run_period(&mut io, &r);
+        let before = inspect.as_mut().map(|i| i.before(&monitor));
         if let Some(a) = monitor.update(ctrl.observer(), p.predicted) {
             out.alarms.push((t, a));
+        }
+        if let (Some(i), Some(b)) = (inspect.as_mut(), before) {
+            i.after(t, &monitor, ctrl.observer(), b, io.plant.truth()[0]);
         }
         if out.ready.is_none() && monitor.ready() {
             out.ready = Some(t);
@@ -202,7 +213,200 @@ fn run(fault: Fault, seed: u64, onset: f64, duration: f64, until_ready: bool) ->
         }
         io.wait();
     }
+    if let Some(i) = inspect {
+        i.header(duration, &monitor);
+    }
     out
+}
+
+/// The monitor's internals printed from the onset for a while (`STRANGER_INSPECT=S` [s]),
+/// for the diagnosis of a miss (`twin/README.md`, the independent plant's misses).
+struct Inspect {
+    onset: f64,
+    until: f64,
+    bump: Option<f64>,
+    started: bool,
+    /// Per watched axis: the direction sliding (1 positive, 0 negative) and where the slide
+    /// began [m], from the twin's modes.
+    slide: [Option<(usize, f64, f64)>; 2],
+    last_x: f64,
+    /// Passes over the bump so far, and a move of X over it whose local check is printed
+    /// once evaluated: (direction, when [s]).
+    passes: usize,
+    report: Option<(usize, f64)>,
+}
+
+/// The levels of the four maps before an update ([`Monitor::level`]).
+type Levels = [[(f32, f32); 2]; 2];
+
+fn dir_of(d: usize) -> Direction {
+    if d == 1 {
+        Direction::Positive
+    } else {
+        Direction::Negative
+    }
+}
+
+impl Inspect {
+    fn from_env(onset: f64, bump: Option<f64>) -> Option<Self> {
+        let s: f64 = std::env::var("STRANGER_INSPECT").ok()?.parse().ok()?;
+        Some(Inspect {
+            onset,
+            until: onset + s,
+            bump,
+            started: false,
+            slide: [None; 2],
+            last_x: f64::NAN,
+            passes: 0,
+            report: None,
+        })
+    }
+
+    fn before(&self, m: &Monitor) -> Levels {
+        let l = |a: Axis, d: usize| m.level(a, dir_of(d)).unwrap_or_default();
+        [
+            [l(Axis::X, 0), l(Axis::X, 1)],
+            [l(Axis::Y, 0), l(Axis::Y, 1)],
+        ]
+    }
+
+    /// Judged bins of a map between `a` and `b` [m], and the map's judged bins in all.
+    fn judged_between(m: &Monitor, axis: Axis, d: usize, a: f64, b: f64) -> (usize, usize) {
+        let Some(map) = m.map(axis, dir_of(d)) else {
+            return (0, 0);
+        };
+        let s = m.settings().map;
+        let (lo, hi) = (map.bin(a.min(b) as f32), map.bin(a.max(b) as f32));
+        let all = (0..BINS).filter(|k| map.view(*k, &s).judged).count();
+        ((lo..=hi).filter(|k| map.view(*k, &s).judged).count(), all)
+    }
+
+    fn after(&mut self, t: f64, m: &Monitor, obs: &Observer<f64>, before: Levels, x_true: f64) {
+        if t < self.onset || t > self.until {
+            self.last_x = x_true;
+            return;
+        }
+        if !self.started {
+            self.started = true;
+            self.header(t, m);
+        }
+        let q = obs.state().q;
+        for (i, axis) in [Axis::X, Axis::Y].into_iter().enumerate() {
+            let dir = match obs.modes()[i] {
+                Mode::Positive => Some(1usize),
+                Mode::Negative => Some(0usize),
+                Mode::Stopped => None,
+            };
+            if let Some((d, from, t0)) = self.slide[i] {
+                if dir != Some(d) {
+                    let (lv, band) = m.level(axis, dir_of(d)).unwrap_or_default();
+                    let gave = lv.to_bits() != before[i][d].0.to_bits();
+                    let (crossed, _) = Self::judged_between(m, axis, d, from, q[i]);
+                    let sd = band.max(0.0).sqrt();
+                    println!(
+                        "    t {t:.1} move {axis:?}{} {from:.3}->{:.3} m ({:.1} s): judged bins crossed {crossed}, {} level {lv:+.3} N, sd {sd:.3} N, z {:+.1}",
+                        if d == 1 { '+' } else { '-' },
+                        q[i],
+                        t - t0,
+                        if gave { "gave" } else { "no new" },
+                        lv / sd.max(1e-9)
+                    );
+                    self.slide[i] = None;
+                    if let Some(c) = self.bump {
+                        if i == 0 && (from - c) * (q[i] - c) < 0.0 {
+                            self.report = Some((d, t + 0.04));
+                        }
+                    }
+                }
+            }
+            if self.slide[i].is_none() {
+                if let Some(d) = dir {
+                    self.slide[i] = Some((d, q[i], t));
+                }
+            }
+        }
+        if let Some(c) = self.bump {
+            if (self.last_x - c) * (x_true - c) <= 0.0 && self.last_x != x_true {
+                self.passes += 1;
+                println!("    t {t:.1} pass {} over the bump", self.passes);
+            }
+            if let Some((d, at)) = self.report {
+                if t >= at {
+                    self.report = None;
+                    self.bins(t, m, c, d);
+                }
+            }
+        }
+        self.last_x = x_true;
+    }
+
+    /// The coverage and levels of the four maps at `t` [s] (the onset, and the run's end).
+    fn header(&self, t: f64, m: &Monitor) {
+        println!("    inspect at {t:.1} s: ready {}", m.ready());
+        for axis in [Axis::X, Axis::Y] {
+            for d in 0..2 {
+                let c = m.coverage(axis, dir_of(d)).unwrap_or_default();
+                let (lv, band) = m.level(axis, dir_of(d)).unwrap_or_default();
+                let (_, all) = Self::judged_between(m, axis, d, 0.0, 0.0);
+                println!(
+                    "    {axis:?}{}: restarts {} moves {} judged bins {all}; level {lv:+.3} N sd {:.3} N",
+                    if d == 1 { '+' } else { '-' },
+                    c.restarts,
+                    c.moves,
+                    band.max(0.0).sqrt()
+                );
+            }
+        }
+    }
+
+    /// After a move of X in direction `d` over the bump centre `c` [m]: that map's bins around
+    /// it (change against the travel's level and band sd [N], `*` not judged, age in moves)
+    /// and both maps' local checks.
+    fn bins(&self, t: f64, m: &Monitor, c: f64, d: usize) {
+        let Some(map) = m.map(Axis::X, dir_of(d)) else {
+            return;
+        };
+        let s = m.settings().map;
+        let (lv, _) = m.level(Axis::X, dir_of(d)).unwrap_or_default();
+        let b0 = map.bin(c as f32);
+        let mut row = String::new();
+        for b in b0.saturating_sub(5)..(b0 + 6).min(BINS) {
+            let v = map.view(b, &s);
+            row.push_str(&format!(
+                " [{:.3}{} {:+.2}/{:.2} a{}]",
+                map.center(b),
+                if v.judged { "" } else { "*" },
+                v.deviation - lv,
+                v.band.max(0.0).sqrt(),
+                v.age
+            ));
+        }
+        let sign = |d: usize| if d == 1 { '+' } else { '-' };
+        println!(
+            "    t {t:.1} after move X{} (passes {}):{row}",
+            sign(d),
+            self.passes
+        );
+        for e in 0..2 {
+            if let Some(l) = m.local_state(Axis::X, dir_of(e)) {
+                let out: Vec<String> = (0..BINS)
+                    .filter(|b| l.out_of_band >> b & 1 == 1)
+                    .map(|b| format!("{:.3}", map.center(b)))
+                    .collect();
+                println!(
+                    "      X{} local: candidate {:?} passes {} local (pending, standing) {:?} drift {:?} pattern {:?} pooled sd {:.3} N; out of band at {}",
+                    sign(e),
+                    l.candidate,
+                    l.passes,
+                    l.local,
+                    l.drift,
+                    l.pattern,
+                    l.pooled.max(0.0).sqrt(),
+                    out.join(" ")
+                );
+            }
+        }
+    }
 }
 
 /// The rig's judgement of an alarm, for the stranger's fault.
@@ -350,7 +554,14 @@ fn onset_for(seed: u64) -> f64 {
 
 fn tally(s: &Scenario, n: u64, print: bool) -> Tally {
     let mut t = Tally::default();
+    // `STRANGER_SEED_LIST=a,b,...`: only those of the seeds (for a diagnosis)
+    let list: Option<Vec<u64>> = std::env::var("STRANGER_SEED_LIST")
+        .ok()
+        .map(|l| l.split(',').filter_map(|x| x.trim().parse().ok()).collect());
     for seed in 1..=n {
+        if list.as_ref().is_some_and(|l| !l.contains(&seed)) {
+            continue;
+        }
         let onset = if s.bound.is_some() {
             onset_for(seed)
         } else {
