@@ -7,12 +7,27 @@
 //!   from the files (load included). Goal: under 60 s.
 //!
 //! `cargo bench -p crane-diagnose --bench diagnose` (10 samples each: about 1 and 7
-//! minutes on 2026-11-27; the long case now about 11 minutes). Measured 2026-11-27 on this
-//! 2-core machine, idle, before the runs were simulated in parallel (one thread):
-//! `cicese_joint1` 0.641 s, `long_10khz_120s` 38.6 s; both goals met then. 2026-11-28, idle:
+//! minutes on 2026-11-27; not run under criterion since the change below). Measured
+//! 2026-11-27 on this 2-core machine, idle, before the runs were simulated in parallel (one
+//! thread): `cicese_joint1` 0.641 s, `long_10khz_120s` 38.6 s; both goals met then.
+//! 2026-11-28, idle:
 //! `cicese_joint1` 0.741 s; the long case 93.1 s for one `crane diagnose` of the bench's files
 //! (criterion estimated 101 s a sample), 67.5 s once the estimate's medians were selected
-//! instead of sorted: **over the 60 s goal** (README's table).
+//! instead of sorted: over the 60 s goal. Bisected (each commit's user time over that of
+//! `8ce3599` run beside it, 2026-11-28 08:09-08:17 UTC, load average under 2): the own-log
+//! floor (`aae8c02`..`0658246`: 1.14), then small steps (`ecf18a7` 1.17, `a8546c8` 1.22,
+//! `7909d40` 1.19), then the 1.2-ratio grids with the fractional delay (`004e28f`: 1.83; dead
+//! band 8 -> 27 and load share 8 -> 25 points before 10 refining steps each, each point two
+//! fits and three simulations of the 60 s fitting run; `d06cc58` put the Stribeck grid back
+//! to 9 points: `89e4a0f` 1.66). This change: 0.76.
+//! Since, each grid point costs two simulations (the chosen level's fitting error is kept,
+//! not simulated again), both dry levels share the first least squares and are fitted and
+//! simulated side by side, and the normal equations are summed in one pass: the same
+//! reports, bit for bit. 2026-11-28 08:06 UTC, the machine nearly idle (load average about
+//! 1, the run included), one `crane diagnose DIR --json F` of the bench's files: **36.0 s**
+//! wall, 41.1 s user (`663c068` right after it: 60.1 s wall, 59.7 s user); `cicese_joint1`
+//! 0.54 s (`663c068`: 0.74 s). Earlier, shared (load 4-5): 63.0 s wall against 108.5 s.
+//! README's table.
 
 use crane_diagnose::{diagnose, DiagnoseOptions};
 use crane_ident::rng::Rng;

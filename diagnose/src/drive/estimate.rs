@@ -303,6 +303,10 @@ pub fn delayed(u: &[f64], i: usize, delay: f64) -> f64 {
     let Some(&first) = u.first() else {
         return 0.0;
     };
+    if delay == 0.0 {
+        // no delay reads sample `i` itself (what the interpolation below gives, bit for bit)
+        return u.get(i).copied().unwrap_or(first);
+    }
     let t = i as f64 - delay;
     if t.is_nan() || t <= 0.0 {
         return first;
@@ -355,142 +359,198 @@ pub fn estimate(
     s: Structure,
     level: DryLevel,
 ) -> Result<Estimate, EstimateError> {
-    // --- 1. sliding least squares -------------------------------------------------------
-    let mut rows = sliding_rows(fit, th, motion, center, &s);
-    let n_pos = rows.iter().filter(|r| r.3 > 0.0).count();
-    let n_neg = rows.len() - n_pos;
-    let fit_pos = n_pos >= MIN_DIRECTION_ROWS;
-    let fit_neg = n_neg >= MIN_DIRECTION_ROWS;
-    let mut flags = Vec::new();
-    if !fit_pos && !fit_neg {
-        return Err(EstimateError::TooFewSliding {
-            samples: rows.len(),
-        });
-    }
-    for (dir, ok, n) in [
-        (Dir::Positive, fit_pos, n_pos),
-        (Dir::Negative, fit_neg, n_neg),
-    ] {
-        if !ok {
-            flags.push(Flag::DirectionNotFitted { dir, samples: n });
+    let sliding = Sliding::new(fit, th, motion, center, s)?;
+    sliding.estimate(fit, th, level)
+}
+
+/// Stage 1 of [`estimate`], the sliding least squares with every coefficient free: the same
+/// for either [`DryLevel`], so a caller that fits both ([`super::experiment::Experiment::fit_only`])
+/// solves it once.
+pub struct Sliding {
+    motion: Motion,
+    center: f64,
+    s: Structure,
+    rows: Vec<(f64, f64, f64, f64, f64)>,
+    lc: LsColumns,
+    first: LsFit,
+    flags: Vec<Flag>,
+    fit_pos: bool,
+    fit_neg: bool,
+    asym: bool,
+}
+
+impl Sliding {
+    /// The sliding rows of structure `s` on the fitting runs and their first least squares.
+    pub fn new(
+        fit: &[&Prepared],
+        th: &Thresholds,
+        motion: Motion,
+        center: f64,
+        s: Structure,
+    ) -> Result<Sliding, EstimateError> {
+        let mut rows = sliding_rows(fit, th, motion, center, &s);
+        let n_pos = rows.iter().filter(|r| r.3 > 0.0).count();
+        let n_neg = rows.len() - n_pos;
+        let fit_pos = n_pos >= MIN_DIRECTION_ROWS;
+        let fit_neg = n_neg >= MIN_DIRECTION_ROWS;
+        let mut flags = Vec::new();
+        if !fit_pos && !fit_neg {
+            return Err(EstimateError::TooFewSliding {
+                samples: rows.len(),
+            });
         }
-    }
-    // drop rows of a direction that is not fitted
-    rows.retain(|r| (r.3 > 0.0 && fit_pos) || (r.3 < 0.0 && fit_neg));
-    let asym = s.asymmetric && fit_pos && fit_neg;
-    let both = fit_pos && fit_neg;
-    // pass 1: every coefficient free (within its bounds)
-    let first = ls_pass(&rows, &s, asym, both, None, [0.0; 2]).ok_or(EstimateError::Singular)?;
-    let kinetic_ls = first.kin;
-    let mut ls = first;
-    // --- 2. breakaway at first motion, 3. kinetic <= breakaway -----------------------------
-    // The breakaway level is measured where the axis leaves rest (net of the modelled position
-    // force), for every structure: resting samples are constraints, not sliding rows. Without
-    // stiction the dry friction is that one level and the least squares is solved again with
-    // it fixed; with stiction the sliding level may lie below it.
-    let mut brk = [0.0; 2];
-    let mut first_motion: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
-    let mut breakaway_scatter = [None, None];
-    let mut kin_flags = Vec::new();
-    let mut gaps: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
-    let mut weights: [Vec<f64>; 2];
-    for _pass in 0..2 {
-        let on = onset_levels(fit, th, &s, motion, center, &ls);
-        first_motion = on.first_motion;
-        breakaway_scatter = [0, 1]
-            .map(|d| breakaway::level(&on.all[d]).and_then(|b| breakaway::scatter(&on.all[d], b)));
-        kin_flags.clear();
-        for dir in Dir::BOTH {
-            let d = dir.index();
-            brk[d] = match breakaway::level(&on.first[d]) {
-                Some(b) => b.max(0.0),
-                None => {
-                    kin_flags.push(Flag::NoFirstMotion { dir });
-                    ls.kin[d]
-                }
-            };
+        for (dir, ok, n) in [
+            (Dir::Positive, fit_pos, n_pos),
+            (Dir::Negative, fit_neg, n_neg),
+        ] {
+            if !ok {
+                flags.push(Flag::DirectionNotFitted { dir, samples: n });
+            }
         }
-        if !fit_pos && first_motion[0].is_empty() {
-            brk[0] = brk[1];
-        }
-        if !fit_neg && first_motion[1].is_empty() {
-            brk[1] = brk[0];
-        }
-        // kinetic friction of the stiction structure: from the energy balance of every slip
-        // (rest to rest, so the kinetic energy is 0 at both ends):
-        // mean friction = integral (F - P(x)) dx / dx_total, minus the viscous part; the gap
-        // of a slip is its onset level minus that. This needs no acceleration estimate, which
-        // at a few samples per slip is the least reliable signal.
-        (gaps, weights) = slip_gaps(
-            fit,
-            th,
-            &s,
+        // drop rows of a direction that is not fitted
+        rows.retain(|r| (r.3 > 0.0 && fit_pos) || (r.3 < 0.0 && fit_neg));
+        let asym = s.asymmetric && fit_pos && fit_neg;
+        let both = fit_pos && fit_neg;
+        // pass 1: every coefficient free (within its bounds)
+        let lc = ls_columns(&rows, &s, asym, both);
+        let first = ls_pass(&rows, &lc, &s, asym, None, [0.0; 2]).ok_or(EstimateError::Singular)?;
+        Ok(Sliding {
             motion,
             center,
-            ls.stiffness,
-            ls.offset,
-            ls.visc,
-            brk,
-        );
-        if !s.stiction && level == DryLevel::Sliding {
-            brk = kinetic_ls;
-        }
-        let mut fixed = brk;
-        for dir in Dir::BOTH {
-            let d = dir.index();
-            if !s.stiction {
-                continue;
+            s,
+            rows,
+            lc,
+            first,
+            flags,
+            fit_pos,
+            fit_neg,
+            asym,
+        })
+    }
+
+    /// Stages 2 and 3 of [`estimate`] with the dry level `level`.
+    pub fn estimate(
+        &self,
+        fit: &[&Prepared],
+        th: &Thresholds,
+        level: DryLevel,
+    ) -> Result<Estimate, EstimateError> {
+        let (motion, center, s, rows, lc) =
+            (self.motion, self.center, self.s, &self.rows, &self.lc);
+        let (fit_pos, fit_neg, asym) = (self.fit_pos, self.fit_neg, self.asym);
+        let mut flags = self.flags.clone();
+        let kinetic_ls = self.first.kin;
+        let mut ls = self.first.clone();
+        // --- 2. breakaway at first motion, 3. kinetic <= breakaway -----------------------------
+        // The breakaway level is measured where the axis leaves rest (net of the modelled position
+        // force), for every structure: resting samples are constraints, not sliding rows. Without
+        // stiction the dry friction is that one level and the least squares is solved again with
+        // it fixed; with stiction the sliding level may lie below it.
+        let mut brk = [0.0; 2];
+        let mut first_motion: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
+        let mut breakaway_scatter = [None, None];
+        let mut kin_flags = Vec::new();
+        let mut gaps: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
+        let mut weights: [Vec<f64>; 2];
+        for _pass in 0..2 {
+            let on = onset_levels(fit, th, &s, motion, center, &ls);
+            first_motion = on.first_motion;
+            breakaway_scatter = [0, 1].map(|d| {
+                breakaway::level(&on.all[d]).and_then(|b| breakaway::scatter(&on.all[d], b))
+            });
+            kin_flags.clear();
+            for dir in Dir::BOTH {
+                let d = dir.index();
+                brk[d] = match breakaway::level(&on.first[d]) {
+                    Some(b) => b.max(0.0),
+                    None => {
+                        kin_flags.push(Flag::NoFirstMotion { dir });
+                        ls.kin[d]
+                    }
+                };
             }
-            let energy_kinetic = if gaps[d].is_empty() {
-                ls.kin[d]
-            } else {
-                // the mean friction over the slips is `kinetic + (brk - kinetic) G`, G the
-                // slips' mean Stribeck weight per distance (0 without weakening)
-                let g = mean(&weights[d]).min(MAX_STRIBECK_WEIGHT);
-                (brk[d] - mean(&gaps[d]) - brk[d] * g) / (1.0 - g)
-            };
-            if energy_kinetic > brk[d] {
-                kin_flags.push(Flag::KineticClamped {
-                    dir,
-                    least_squares: energy_kinetic,
-                });
-            } else {
-                fixed[d] = energy_kinetic.max(0.0);
+            if !fit_pos && first_motion[0].is_empty() {
+                brk[0] = brk[1];
             }
+            if !fit_neg && first_motion[1].is_empty() {
+                brk[1] = brk[0];
+            }
+            // kinetic friction of the stiction structure: from the energy balance of every slip
+            // (rest to rest, so the kinetic energy is 0 at both ends):
+            // mean friction = integral (F - P(x)) dx / dx_total, minus the viscous part; the gap
+            // of a slip is its onset level minus that. This needs no acceleration estimate, which
+            // at a few samples per slip is the least reliable signal.
+            (gaps, weights) = slip_gaps(
+                fit,
+                th,
+                &s,
+                motion,
+                center,
+                ls.stiffness,
+                ls.offset,
+                ls.visc,
+                brk,
+            );
+            if !s.stiction && level == DryLevel::Sliding {
+                brk = kinetic_ls;
+            }
+            let mut fixed = brk;
+            for dir in Dir::BOTH {
+                let d = dir.index();
+                if !s.stiction {
+                    continue;
+                }
+                let energy_kinetic = if gaps[d].is_empty() {
+                    ls.kin[d]
+                } else {
+                    // the mean friction over the slips is `kinetic + (brk - kinetic) G`, G the
+                    // slips' mean Stribeck weight per distance (0 without weakening)
+                    let g = mean(&weights[d]).min(MAX_STRIBECK_WEIGHT);
+                    (brk[d] - mean(&gaps[d]) - brk[d] * g) / (1.0 - g)
+                };
+                if energy_kinetic > brk[d] {
+                    kin_flags.push(Flag::KineticClamped {
+                        dir,
+                        least_squares: energy_kinetic,
+                    });
+                } else {
+                    fixed[d] = energy_kinetic.max(0.0);
+                }
+            }
+            ls = ls_pass(rows, lc, &s, asym, Some(fixed), brk).ok_or(EstimateError::Singular)?;
+            ls.kin = fixed;
         }
-        ls = ls_pass(&rows, &s, asym, both, Some(fixed), brk).ok_or(EstimateError::Singular)?;
-        ls.kin = fixed;
+        flags.extend(ls.flags.iter().copied());
+        flags.extend(kin_flags);
+        let (mut kin, mut visc) = (ls.kin, ls.visc);
+        // a direction that was not fitted copies the other one
+        if !fit_pos {
+            kin[0] = kin[1];
+            visc[0] = visc[1];
+        }
+        if !fit_neg {
+            kin[1] = kin[0];
+            visc[1] = visc[0];
+        }
+        for d in 0..2 {
+            kin[d] = kin[d].min(brk[d]);
+        }
+        if let Some(f) = unresolved(fit, ls.inertia, visc) {
+            flags.push(f);
+        }
+        let params = drive_params(motion, center, &s, &ls, kin, visc, brk);
+        Ok(Estimate {
+            params,
+            structure: s,
+            flags,
+            first_motion,
+            breakaway_scatter,
+            kinetic_ls,
+            slip_gaps: gaps,
+            rows: rows.len(),
+            level,
+        })
     }
-    flags.extend(ls.flags.iter().copied());
-    flags.extend(kin_flags);
-    let (mut kin, mut visc) = (ls.kin, ls.visc);
-    // a direction that was not fitted copies the other one
-    if !fit_pos {
-        kin[0] = kin[1];
-        visc[0] = visc[1];
-    }
-    if !fit_neg {
-        kin[1] = kin[0];
-        visc[1] = visc[0];
-    }
-    for d in 0..2 {
-        kin[d] = kin[d].min(brk[d]);
-    }
-    if let Some(f) = unresolved(fit, ls.inertia, visc) {
-        flags.push(f);
-    }
-    let params = drive_params(motion, center, &s, &ls, kin, visc, brk);
-    Ok(Estimate {
-        params,
-        structure: s,
-        flags,
-        first_motion,
-        breakaway_scatter,
-        kinetic_ls,
-        slip_gaps: gaps,
-        rows: rows.len(),
-        level,
-    })
 }
 
 /// The sliding samples as least-squares rows `(F, a, shape, v, x)`: the applied force (net of
@@ -661,6 +721,7 @@ fn drive_params(
 }
 
 /// One sliding least-squares solve.
+#[derive(Clone)]
 struct LsFit {
     inertia: f64,
     stiffness: f64,
@@ -693,35 +754,40 @@ fn unresolved(fit: &[&Prepared], inertia: f64, visc: [f64; 2]) -> Option<Flag> {
     )
 }
 
-/// Rows are `(F, a, shape, v, x)`. With `fixed_kinetic` the dry levels are moved to the
-/// left-hand side and only inertia, stiffness, viscous and offset are fitted; with velocity
-/// weakening ([`Structure::stribeck`]) that dry level is the Stribeck blend of the fixed
-/// kinetic level and `breakaway` ([force units], `[positive, negative]`) at each row's velocity.
-fn ls_pass(
+/// The sliding rows' least-squares columns, built once per estimate: every pass solves with
+/// them (the fixed-kinetic passes without the kinetic ones), so their normal matrix and the
+/// inertia floor are computed once too.
+struct LsColumns {
+    /// Every column of the structure, in the solve's order.
+    cols: Vec<(Col, Vec<f64>)>,
+    /// Their normal matrix ([`crate::fit::gram`]).
+    gram: Vec<Vec<f64>>,
+    /// The inertia floor: a thousandth of the force-to-acceleration scale of the sliding rows.
+    floor: f64,
+}
+
+/// The columns of rows `(F, a, shape, v, x)` for structure `s` (see [`ls_pass`]).
+fn ls_columns(
     rows: &[(f64, f64, f64, f64, f64)],
     s: &Structure,
     asym: bool,
     both: bool,
-    fixed_kinetic: Option<[f64; 2]>,
-    breakaway: [f64; 2],
-) -> Option<LsFit> {
+) -> LsColumns {
     let mut cols: Vec<(Col, Vec<f64>)> = vec![(Col::Inertia, rows.iter().map(|r| r.1).collect())];
     if s.restoring {
         cols.push((Col::Stiffness, rows.iter().map(|r| r.2).collect()));
     }
-    if fixed_kinetic.is_none() {
-        if asym {
-            cols.push((
-                Col::KineticPos,
-                rows.iter().map(|r| f64::from(r.3 > 0.0)).collect(),
-            ));
-            cols.push((
-                Col::KineticNeg,
-                rows.iter().map(|r| -f64::from(r.3 < 0.0)).collect(),
-            ));
-        } else {
-            cols.push((Col::KineticSym, rows.iter().map(|r| r.3.signum()).collect()));
-        }
+    if asym {
+        cols.push((
+            Col::KineticPos,
+            rows.iter().map(|r| f64::from(r.3 > 0.0)).collect(),
+        ));
+        cols.push((
+            Col::KineticNeg,
+            rows.iter().map(|r| -f64::from(r.3 < 0.0)).collect(),
+        ));
+    } else {
+        cols.push((Col::KineticSym, rows.iter().map(|r| r.3.signum()).collect()));
     }
     if asym {
         cols.push((Col::ViscousPos, rows.iter().map(|r| r.3.max(0.0)).collect()));
@@ -741,6 +807,40 @@ fn ls_pass(
                 .collect(),
         ));
     }
+    let refs: Vec<&[f64]> = cols.iter().map(|(_, c)| c.as_slice()).collect();
+    let gram = crate::fit::gram(&refs, rows.len(), None);
+    // inertia floor: a thousandth of the force-to-acceleration scale of the sliding rows
+    let scale = median(rows.iter().map(|r| r.0.abs()).collect())
+        / median(rows.iter().map(|r| r.1.abs()).collect()).max(1e-12);
+    let floor = (1e-3 * scale).max(1e-9);
+    LsColumns { cols, gram, floor }
+}
+
+/// Rows are `(F, a, shape, v, x)`, their columns `lc` ([`ls_columns`]). With `fixed_kinetic`
+/// the dry levels are moved to the
+/// left-hand side and only inertia, stiffness, viscous and offset are fitted; with velocity
+/// weakening ([`Structure::stribeck`]) that dry level is the Stribeck blend of the fixed
+/// kinetic level and `breakaway` ([force units], `[positive, negative]`) at each row's velocity.
+fn ls_pass(
+    rows: &[(f64, f64, f64, f64, f64)],
+    lc: &LsColumns,
+    s: &Structure,
+    asym: bool,
+    fixed_kinetic: Option<[f64; 2]>,
+    breakaway: [f64; 2],
+) -> Option<LsFit> {
+    let kinetic = |c: Col| matches!(c, Col::KineticPos | Col::KineticNeg | Col::KineticSym);
+    let sel: Vec<usize> = (0..lc.cols.len())
+        .filter(|&i| fixed_kinetic.is_none() || !kinetic(lc.cols[i].0))
+        .collect();
+    let cols: Vec<(Col, &[f64])> = sel
+        .iter()
+        .map(|&i| (lc.cols[i].0, lc.cols[i].1.as_slice()))
+        .collect();
+    let gram: Vec<Vec<f64>> = sel
+        .iter()
+        .map(|&i| sel.iter().map(|&j| lc.gram[i][j]).collect())
+        .collect();
 
     let y: Vec<f64> = rows
         .iter()
@@ -753,10 +853,7 @@ fn ls_pass(
             }
         })
         .collect();
-    // inertia floor: a thousandth of the force-to-acceleration scale of the sliding rows
-    let scale = median(rows.iter().map(|r| r.0.abs()).collect())
-        / median(rows.iter().map(|r| r.1.abs()).collect()).max(1e-12);
-    let floor = (1e-3 * scale).max(1e-9);
+    let floor = lc.floor;
     let lower: Vec<Option<f64>> = cols
         .iter()
         .map(|(c, _)| match c {
@@ -765,8 +862,8 @@ fn ls_pass(
             _ => Some(0.0),
         })
         .collect();
-    let col_refs: Vec<&[f64]> = cols.iter().map(|(_, c)| c.as_slice()).collect();
-    let (theta, at_bound) = bounded_ls(&col_refs, &y, &lower)?;
+    let col_refs: Vec<&[f64]> = cols.iter().map(|(_, c)| *c).collect();
+    let (theta, at_bound) = bounded_ls_gram(&col_refs, &gram, &y, &lower)?;
     let get = |want: Col| {
         cols.iter()
             .position(|(c, _)| *c == want)
@@ -846,20 +943,41 @@ pub fn bounded_ls(
     y: &[f64],
     lower: &[Option<f64>],
 ) -> Option<(Vec<f64>, Vec<bool>)> {
+    bounded_ls_gram(cols, &crate::fit::gram(cols, y.len(), None), y, lower)
+}
+
+/// [`bounded_ls`] with the columns' normal matrix `gram` ([`crate::fit::gram`]) given: the
+/// matrix of the free columns is its rows and columns of them (the same sums as a gram of
+/// those columns alone), so every re-solve of the active set sums only its right-hand side.
+fn bounded_ls_gram(
+    cols: &[&[f64]],
+    gram: &[Vec<f64>],
+    y: &[f64],
+    lower: &[Option<f64>],
+) -> Option<(Vec<f64>, Vec<bool>)> {
     let p = cols.len();
     let mut fixed: Vec<Option<f64>> = vec![None; p];
     for _ in 0..=p {
         let free: Vec<usize> = (0..p).filter(|&i| fixed[i].is_none()).collect();
-        let mut r = y.to_vec();
-        for (i, f) in fixed.iter().enumerate() {
-            if let Some(val) = f {
-                for (rk, ck) in r.iter_mut().zip(cols[i]) {
-                    *rk -= val * ck;
+        let fc: Vec<&[f64]> = free.iter().map(|&i| cols[i]).collect();
+        let b = if fixed.iter().all(Option::is_none) {
+            crate::fit::moments(&fc, y, None)
+        } else {
+            let mut r = y.to_vec();
+            for (i, f) in fixed.iter().enumerate() {
+                if let Some(val) = f {
+                    for (rk, ck) in r.iter_mut().zip(cols[i]) {
+                        *rk -= val * ck;
+                    }
                 }
             }
-        }
-        let fc: Vec<&[f64]> = free.iter().map(|&i| cols[i]).collect();
-        let th = crate::fit::ls(&fc, &r)?;
+            crate::fit::moments(&fc, &r, None)
+        };
+        let a: Vec<Vec<f64>> = free
+            .iter()
+            .map(|&i| free.iter().map(|&j| gram[i][j]).collect())
+            .collect();
+        let th = crate::fit::solve_normal(a, b)?;
         let mut worst: Option<(usize, f64)> = None;
         for (j, &i) in free.iter().enumerate() {
             if let Some(lo) = lower[i] {

@@ -5,9 +5,9 @@
 //! One type so that the diagnosis of the recorded runs and of the baseline's own synthetic
 //! log ([`super::floor`]) are the same pipeline, not two copies of it.
 
-use super::estimate::{estimate, DryLevel, Estimate, Flag, Structure};
+use super::estimate::{DryLevel, Estimate, Flag, Sliding, Structure};
 use super::prep::{moves, Prepared, Thresholds};
-use super::score::{run_nmae, score, simulate, Scored};
+use super::score::{score, simulate, RunScale, Scored};
 use crate::DiagnoseError;
 use crane_model::drive::Motion;
 use rayon::prelude::*;
@@ -42,6 +42,8 @@ pub struct Experiment<'a> {
     /// Held-out runs in which the axis never leaves rest cannot tell friction models apart
     /// (every model that sticks predicts them equally).
     pub selection_runs: Vec<usize>,
+    /// What scoring a simulation reads of each fitting run, computed once.
+    fit_scales: Vec<RunScale>,
 }
 
 /// The baseline structure fitted by least squares, and refined by output error.
@@ -87,7 +89,9 @@ impl<'a> Experiment<'a> {
         } else {
             (0..held.len()).collect()
         };
+        let fit_scales = fit.iter().map(|r| RunScale::new(r, th.quantum)).collect();
         Experiment {
+            fit_scales,
             fit,
             held,
             th,
@@ -116,9 +120,10 @@ impl<'a> Experiment<'a> {
         let v: Vec<f64> = self
             .fit
             .par_iter()
-            .map(|r| {
+            .zip(&self.fit_scales)
+            .map(|(r, scale)| {
                 simulate(est, r)
-                    .map(|s| run_nmae(&s, r, self.th.quantum))
+                    .map(|s| scale.run_nmae(&s, r))
                     .unwrap_or(f64::INFINITY)
             })
             .collect();
@@ -131,17 +136,36 @@ impl<'a> Experiment<'a> {
     /// ones): the level at first motion unless the sliding one simulates them
     /// [`SLIDING_LEVEL_GAIN`] times better.
     pub fn fit_only(&self, s: Structure) -> Result<Estimate, String> {
+        self.fit_with_error(s).map(|(est, _)| est)
+    }
+
+    /// [`Experiment::fit_only`] with the chosen model's [`Experiment::fit_error`] when the
+    /// choice simulated it (a structure without stiction), so a caller that needs it does
+    /// not simulate the fitting runs again. Both levels are fitted and simulated side by
+    /// side (rayon): the same values as one after the other.
+    pub fn fit_with_error(&self, s: Structure) -> Result<(Estimate, Option<f64>), String> {
         let (th, motion, center) = (&self.th, self.motion, self.center);
-        let mut est = estimate(&self.fit, th, motion, center, s, DryLevel::FirstMotion)
-            .map_err(|e| e.to_string())?;
-        if !s.stiction {
-            if let Ok(sliding) = estimate(&self.fit, th, motion, center, s, DryLevel::Sliding) {
-                if SLIDING_LEVEL_GAIN * self.fit_error(&sliding) < self.fit_error(&est) {
-                    est = sliding;
-                }
-            }
+        // the sliding least squares with every coefficient free is the same for both levels
+        let first = Sliding::new(&self.fit, th, motion, center, s).map_err(|e| e.to_string())?;
+        if s.stiction {
+            let est = first.estimate(&self.fit, th, DryLevel::FirstMotion);
+            return est.map(|e| (e, None)).map_err(|e| e.to_string());
         }
-        Ok(est)
+        let (est, sliding) = rayon::join(
+            || first.estimate(&self.fit, th, DryLevel::FirstMotion),
+            || first.estimate(&self.fit, th, DryLevel::Sliding),
+        );
+        let est = est.map_err(|e| e.to_string())?;
+        let Ok(sliding) = sliding else {
+            return Ok((est, None));
+        };
+        let (e_sliding, e_first) =
+            rayon::join(|| self.fit_error(&sliding), || self.fit_error(&est));
+        Ok(if SLIDING_LEVEL_GAIN * e_sliding < e_first {
+            (sliding, Some(e_sliding))
+        } else {
+            (est, Some(e_first))
+        })
     }
 
     /// A fitted model scored on the held-out runs, with its selection score (the mean over

@@ -49,11 +49,19 @@ pub fn nmae(sim: &[f64], meas: &[f64], quantum: f64) -> f64 {
     if meas.is_empty() || sim.len() != meas.len() {
         return f64::INFINITY;
     }
-    let (lo, hi) = meas
-        .iter()
+    nmae_over(sim, meas, extent(meas), quantum)
+}
+
+/// The smallest and largest of `x` (`(inf, -inf)` when empty).
+fn extent(x: &[f64]) -> (f64, f64) {
+    x.iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
             (l.min(x), h.max(x))
-        });
+        })
+}
+
+/// [`nmae`] with the measured range `(lo, hi)` given.
+fn nmae_over(sim: &[f64], meas: &[f64], (lo, hi): (f64, f64), quantum: f64) -> f64 {
     let range = (hi - lo).max(quantum).max(f64::MIN_POSITIVE);
     let mae = sim
         .iter()
@@ -105,11 +113,11 @@ pub const DIVERGED_RANGES: f64 = 10.0;
 /// Whether a simulation left the measured range by [`DIVERGED_RANGES`] ranges, or is not
 /// finite.
 pub fn diverged(sim: &[f64], meas: &[f64], quantum: f64) -> bool {
-    let (lo, hi) = meas
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
-            (l.min(x), h.max(x))
-        });
+    diverged_from(sim, extent(meas), quantum)
+}
+
+/// [`diverged`] with the measured range `(lo, hi)` given.
+fn diverged_from(sim: &[f64], (lo, hi): (f64, f64), quantum: f64) -> bool {
     let range = (hi - lo).max(quantum);
     let (a, b) = (lo - DIVERGED_RANGES * range, hi + DIVERGED_RANGES * range);
     sim.iter().any(|&s| !(s >= a && s <= b))
@@ -123,6 +131,47 @@ pub fn run_nmae(sim: &[f64], run: &Prepared, quantum: f64) -> f64 {
     }
     let k = active_from(run, quantum);
     nmae(&sim[k..], &run.run.x[k..], quantum)
+}
+
+/// What [`run_nmae`] reads of a run besides the simulation, computed once per run (a
+/// grid search scores hundreds of simulations of the same fitting runs).
+#[derive(Clone, Copy, Debug)]
+pub struct RunScale {
+    /// The run's active part's first sample ([`active_from`]).
+    active: usize,
+    /// The smallest and largest measured position.
+    whole: (f64, f64),
+    /// The same over the active part.
+    part: (f64, f64),
+    /// The position quantum.
+    quantum: f64,
+}
+
+impl RunScale {
+    /// The scale of `run` with position quantum `quantum`.
+    pub fn new(run: &Prepared, quantum: f64) -> RunScale {
+        let x = &run.run.x;
+        let active = active_from(run, quantum);
+        RunScale {
+            active,
+            whole: extent(x),
+            part: extent(x.get(active..).unwrap_or(&[])),
+            quantum,
+        }
+    }
+
+    /// [`run_nmae`] of a simulation of `run`, the run this scale was made of: the same value.
+    pub fn run_nmae(&self, sim: &[f64], run: &Prepared) -> f64 {
+        let x = &run.run.x;
+        if sim.len() != x.len() || diverged_from(sim, self.whole, self.quantum) {
+            return f64::INFINITY;
+        }
+        let k = self.active;
+        if x.len() == k {
+            return f64::INFINITY;
+        }
+        nmae_over(&sim[k..], &x[k..], self.part, self.quantum)
+    }
 }
 
 /// NMAE of predicting no motion at all (the run's first position throughout) [%], over the

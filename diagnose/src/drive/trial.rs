@@ -135,8 +135,8 @@ pub(super) fn try_cause(
     // a structure fitted on the fitting runs, with its simulated error there (the measure
     // every grid-searched value is chosen by)
     let fitted = |st: Structure| -> Option<(Estimate, f64)> {
-        let est = ex.fit_only(st).ok()?;
-        let e = ex.fit_error(&est);
+        let (est, e) = ex.fit_with_error(st).ok()?;
+        let e = e.unwrap_or_else(|| ex.fit_error(&est));
         Some((est, e))
     };
     match cause {
