@@ -45,7 +45,6 @@ use alarm::{Alarm, AlarmKind, Debounce};
 use breakaway::{BreakawayWatch, Limits, Sense};
 use crane_model::friction::dry_at;
 use crane_model::{Axis, Direction, Mode, Real};
-pub use inspect::{LocalPattern, LocalState};
 use map::{MapSettings, SlidingMap, BINS};
 
 /// Drive axes watched: the trolley's X and Y. The rope drive is not watched: its residual
