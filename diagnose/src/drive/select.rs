@@ -51,8 +51,13 @@ pub(super) struct Context<'a> {
     /// The baseline, by least squares and refined by output error.
     pub base: &'a Baseline,
     /// The held-out NMAE the baseline leaves on its own replayed log [%]
-    /// ([`super::floor::own_log`]; `None` where it could not be replayed).
+    /// ([`super::floor::own_log`]; `None` where it could not be replayed, or where it is no
+    /// floor: see [`Self::own_floor_failed`]).
     pub own_floor: Option<f64>,
+    /// The own-log error [%] when it is no smaller than predicting no motion
+    /// ([`Self::sel_no_motion`]): the baseline then fails to fit even its own simulation, so
+    /// that error measures the fit, not what the log resolves, and it is no floor.
+    pub own_floor_failed: Option<f64>,
     /// The held-out NMAE of the encoder's own error [%] ([`super::floor::encoder`]).
     pub noise_floor: f64,
     /// Largest |input| of the fitting runs [input units].
@@ -102,6 +107,8 @@ impl<'a> Context<'a> {
                 .map(|p| super::prep::motions(&p.v, th.v_move, sign).len())
                 .sum()
         };
+        // an own log refitted no better than predicting rest is no floor: causes are tried
+        let (own_floor, own_floor_failed) = super::floor::usable(own_floor, sel_no_motion);
         let (fit_pos, fit_neg) = (motions_dir(1.0), motions_dir(-1.0));
         let fit_motions = fit_pos + fit_neg;
         let timing = prepared
@@ -115,6 +122,7 @@ impl<'a> Context<'a> {
             info,
             base,
             own_floor,
+            own_floor_failed,
             noise_floor: super::floor::encoder(held, th),
             umax,
             dt,
