@@ -210,8 +210,8 @@ pub struct AxisError {
     /// Held-out NMAE [%] the baseline leaves on its own replayed log (single axis: the
     /// baseline simulated from the recorded inputs, logged as these data were, and fitted
     /// again; `drive::floor`): what this log and method leave with nothing missing. `null`
-    /// when not computed (crane data), when the replay cannot be fitted, or when it is no
-    /// better than predicting no motion (then the fit fails, and it is no floor).
+    /// when not computed (crane data), when the replay cannot be fitted, or when it is above
+    /// half of predicting no motion (then the fit fails, and it is no floor).
     #[serde(default)]
     pub nmae_own_log: Option<f64>,
     /// RMS inverse-dynamics force residual on the fitting part [N].

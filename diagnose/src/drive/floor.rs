@@ -140,15 +140,25 @@ pub fn encoder(held: &[&Prepared], th: &Thresholds) -> f64 {
     100.0 * 0.5 * th.quantum / range_mean
 }
 
+/// Largest share of the no-motion error an own-log error may have and still be a floor [1]:
+/// a baseline that, refitted on its own simulation, misses more than half of the motion
+/// itself fails there, whatever the log resolves. On the 140 stranger cases the floors that
+/// held were at most 0.063 of the no-motion error and those that failed 0.58-1.02 (any
+/// share between the two gives the same verdicts).
+pub const MAX_SHARE_OF_REST: f64 = 0.5;
+
 /// The own-log error `own` [%] split by whether it is a floor: `(floor, failed)`. It is one
-/// while it is below `no_motion` [%], the held-out error of predicting no motion (the scale
-/// of the motion itself). At or above that, the baseline refits its own simulation no
-/// better than predicting rest: the fit fails there (stranger s054: a 0.19 s delay made the
-/// least squares want a negative viscous coefficient; own log 18.8 %, rest 18.4 %), so the
-/// error measures the fit, not what the log resolves, and it is `failed` instead.
+/// while it is below [`MAX_SHARE_OF_REST`] of `no_motion` [%], the held-out error of
+/// predicting no motion (the scale of the motion itself). Above that the baseline refits
+/// its own simulation barely better than predicting rest: the fit fails there, so the error
+/// measures the fit, not what the log resolves, and it is `failed` instead. Strangers of
+/// seed 7: s054 (a 0.19 s delay made the least squares want a negative viscous
+/// coefficient; own log 18.8 %, rest 18.4 %), s031 (a 49 N/m spring the baseline lacks: own
+/// log 27.8 %, rest 33.9 %; with the spring the held-out error is 0.03 %), s047 (stiction
+/// at 5 kHz: 11.8 % against 20.5 %).
 pub fn usable(own: Option<f64>, no_motion: f64) -> (Option<f64>, Option<f64>) {
     match own {
-        Some(f) if f < no_motion => (Some(f), None),
+        Some(f) if f < MAX_SHARE_OF_REST * no_motion => (Some(f), None),
         Some(f) => (None, Some(f)),
         None => (None, None),
     }
@@ -161,8 +171,10 @@ mod tests {
     #[test]
     fn an_own_log_no_better_than_rest_is_no_floor() {
         assert_eq!(usable(Some(0.39), 40.9), (Some(0.39), None));
+        assert_eq!(usable(Some(1.99), 51.5), (Some(1.99), None));
         assert_eq!(usable(Some(18.84), 18.39), (None, Some(18.84)));
-        assert_eq!(usable(Some(18.39), 18.39), (None, Some(18.39)));
+        assert_eq!(usable(Some(11.83), 20.53), (None, Some(11.83)));
+        assert_eq!(usable(Some(10.0), 20.0), (None, Some(10.0)));
         assert_eq!(usable(None, 18.39), (None, None));
     }
 

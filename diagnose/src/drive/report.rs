@@ -126,7 +126,7 @@ fn flags(
         flags.push(format!("own-log floor: the baseline's own simulation, logged as these data, leaves {f:.4} % held out (the baseline: {:.4} %)", ctx.base_best()));
     }
     if let Some(f) = ctx.own_floor_failed {
-        flags.push(format!("own-log floor not used: the baseline's own simulation, logged as these data and fitted again, leaves {f:.4} % held out, no better than predicting no motion ({:.4} %): there the fit fails (as it does with an effect the baseline lacks, a long delay for one), so that error says nothing of what the log resolves", ctx.sel_no_motion));
+        flags.push(format!("own-log floor not used: the baseline's own simulation, logged as these data and fitted again, leaves {f:.4} % held out, more than {:.0} % of what predicting no motion leaves ({:.4} %): there the fit fails (as it does with an effect the baseline lacks: a long delay, a spring), so that error says nothing of what the log resolves, and causes are tried", 100.0 * super::floor::MAX_SHARE_OF_REST, ctx.sel_no_motion));
     }
     flags.push(format!(
         "velocity and acceleration from local quadratic fits over {} samples ({:.4} s): the shortest window whose acceleration noise is below {:.0} % of the motion's",

@@ -54,9 +54,10 @@ pub(super) struct Context<'a> {
     /// ([`super::floor::own_log`]; `None` where it could not be replayed, or where it is no
     /// floor: see [`Self::own_floor_failed`]).
     pub own_floor: Option<f64>,
-    /// The own-log error [%] when it is no smaller than predicting no motion
-    /// ([`Self::sel_no_motion`]): the baseline then fails to fit even its own simulation, so
-    /// that error measures the fit, not what the log resolves, and it is no floor.
+    /// The own-log error [%] when it is above half of predicting no motion
+    /// ([`Self::sel_no_motion`], [`super::floor::usable`]): the baseline then fails to fit
+    /// even its own simulation, so that error measures the fit, not what the log resolves,
+    /// and it is no floor.
     pub own_floor_failed: Option<f64>,
     /// The held-out NMAE of the encoder's own error [%] ([`super::floor::encoder`]).
     pub noise_floor: f64,
@@ -107,7 +108,7 @@ impl<'a> Context<'a> {
                 .map(|p| super::prep::motions(&p.v, th.v_move, sign).len())
                 .sum()
         };
-        // an own log refitted no better than predicting rest is no floor: causes are tried
+        // an own log refitted barely better than predicting rest is no floor: causes are tried
         let (own_floor, own_floor_failed) = super::floor::usable(own_floor, sel_no_motion);
         let (fit_pos, fit_neg) = (motions_dir(1.0), motions_dir(-1.0));
         let fit_motions = fit_pos + fit_neg;
