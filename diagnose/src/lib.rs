@@ -326,7 +326,12 @@ fn drive_runs(
             let read_at = (0..a.source_t.len()).map(every).collect();
             (a.x_refresh, a.x.clone(), read_at)
         } else {
-            let refresh = crane_ident::data::timebase::held_channel(&a.x).map_or(1, |(r, _)| r);
+            // the hold as the grid shows it, else as the file's rows did (a jittered log's
+            // resampling moves the repeats off the rows' lattice: stranger seed 11's s051,
+            // x every 5 rows, was read as fresh on 4 of its 6 runs, and a window spanning
+            // 3 fresh positions made the inertia 4,000 times low)
+            let refresh =
+                crane_ident::data::timebase::held_channel(&a.x).map_or(a.x_held.max(1), |(r, _)| r);
             let read_at = drive::prep::read_instants(&a.x, &a.source_t, refresh);
             (refresh, drive::prep::unhold(&a.x, refresh), read_at)
         };

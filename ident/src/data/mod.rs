@@ -104,6 +104,10 @@ pub struct AxisRun {
     /// must span it. 0 or 1: every sample is fresh, or a held channel is still visible in
     /// `x` (its repeats: `timebase::held_channel`).
     pub x_refresh: usize,
+    /// Rows per refresh of the position column as logged ([`timebase::held_channel`] on the
+    /// file's rows, before any resampling; 1: fresh on every row). A resampled log's grid
+    /// shifts the repeats off the rows' lattice, where the hold is no longer seen.
+    pub x_held: usize,
     /// Drive effort `gain * u` [N or N m] when the gain is known, else `u` itself [input
     /// units].
     pub force: Vec<f64>,
@@ -148,6 +152,7 @@ impl AxisRun {
             source_t: cut(&self.source_t),
             x: cut(&self.x),
             x_refresh: self.x_refresh,
+            x_held: self.x_held,
             force: cut(&self.force),
             u: cut(&self.u),
             position_unit: self.position_unit,
@@ -518,6 +523,7 @@ pub fn axis_run(
         }
     };
     let mut notes = Vec::new();
+    let x_held = timebase::held_channel(&x).map_or(1, |(r, _)| r.max(1));
     for (name, col) in [("x", &x), (u_name, &u)] {
         if let Some((rows_per_refresh, repeated_share)) = timebase::held_channel(col) {
             let idx = table.find(name, renames).unwrap_or(0);
@@ -533,6 +539,7 @@ pub fn axis_run(
         t,
         x,
         x_refresh: 0,
+        x_held,
         force,
         u,
         position_unit,

@@ -32,6 +32,13 @@ pub const HELD_MAX_REFRESH_ROWS: usize = 16;
 /// Share of consecutive-row changes above which a channel is refreshed every row (10 %).
 pub const HELD_MAX_CONSECUTIVE_SHARE: f64 = 0.10;
 
+/// Share of a channel's gaps between changes that must be whole multiples of the shortest
+/// for the gaps to be a refresh lattice ([`held_channel`]); the rest of the gaps, at least
+/// as large a share, must be longer multiples. A held channel's gaps are all multiples of its
+/// refresh (100 %) and a quantised signal's take every value its speed sets (about one in
+/// the shortest gap on the lattice): any share between separates them.
+pub const HELD_LATTICE_SHARE: f64 = 0.9;
+
 /// What was irregular about a run's time stamps.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Irregularity {
@@ -334,6 +341,13 @@ pub fn held_channel(c: &[f64]) -> Option<(usize, f64)> {
     if changes.len() < HELD_MIN_CHANGES || gaps.len() < HELD_MIN_CHANGES || consecutive(&gaps) {
         return None;
     }
+    let repeated = (c.len() - 1 - changes.len()) as f64 / (c.len() - 1) as f64;
+    // a lattice of gaps is a hold whatever the size of the steps: a coarse encoder's held
+    // position moves one count per refresh at low speed (stranger seed 11's s051: 5 kHz
+    // rows, x every 5, 0.26 mrad counts; 63-70 % single counts, every gap 5, 10, 15 ... rows)
+    if let Some(g) = lattice(&gaps) {
+        return Some((g, repeated));
+    }
     let deltas: Vec<f64> = changes.iter().map(|&k| (c[k] - c[k - 1]).abs()).collect();
     let q = deltas.iter().copied().fold(f64::INFINITY, f64::min);
     let single = deltas.iter().filter(|&&d| d <= 1.5 * q).count();
@@ -342,8 +356,23 @@ pub fn held_channel(c: &[f64]) -> Option<(usize, f64)> {
     }
     let mid = gaps.len() / 2;
     let (_, m, _) = gaps.select_nth_unstable(mid);
-    let repeated = (c.len() - 1 - changes.len()) as f64 / (c.len() - 1) as f64;
     Some((*m, repeated))
+}
+
+/// The refresh [rows] of a channel whose `gaps` between changes (rests excluded) sit on a
+/// lattice: the shortest is at least 2 rows, at least [`HELD_LATTICE_SHARE`] of them are
+/// whole multiples of it, and at least `1 - HELD_LATTICE_SHARE` of them longer multiples (the
+/// speed varied and the gaps stayed on the lattice, which a quantised signal's cannot: a
+/// creep at one count every 4 rows is no hold). `None` otherwise.
+fn lattice(gaps: &[usize]) -> Option<usize> {
+    let g0 = *gaps.iter().min()?;
+    if g0 < 2 {
+        return None;
+    }
+    let n = gaps.len() as f64;
+    let on = gaps.iter().filter(|&&g| g % g0 == 0).count() as f64;
+    let longer = gaps.iter().filter(|&&g| g % g0 == 0 && g > g0).count() as f64;
+    (on >= HELD_LATTICE_SHARE * n && longer >= (1.0 - HELD_LATTICE_SHARE) * n).then_some(g0)
 }
 
 #[cfg(test)]
@@ -466,6 +495,15 @@ mod tests {
         // a quantised slow creep (one count every 4 rows) is not held
         let creep: Vec<f64> = (0..300).map(|k| (k / 4) as f64 * 5.2e-6).collect();
         assert_eq!(held_channel(&creep), None);
+        // a coarse encoder held every 5 rows, mostly one count per refresh at a varying
+        // speed: the gaps are 5, 10, 15 rows, a lattice, and it is held
+        let counts = |t: usize| (30.0 * (t as f64 * 0.01).sin()).round();
+        let coarse: Vec<f64> = (0..1200).map(|k| counts(k - k % 5)).collect();
+        assert_eq!(held_channel(&coarse).map(|h| h.0), Some(5));
+        // the same signal fresh on every row is a slowly moving quantised one (gaps of 3 to
+        // 14 rows, every step one count), not held
+        let creep2: Vec<f64> = (0..1200).map(counts).collect();
+        assert_eq!(held_channel(&creep2), None);
         // at rest, then moving every row
         let mut rest = vec![0.0; 200];
         rest.extend((0..100).map(|k| k as f64 * 0.37));
