@@ -3,7 +3,8 @@
 //! costs the firmware nothing. A child module of `monitor`, it reads the monitor's private
 //! state without widening it.
 
-use super::{local_pattern, Judged, Monitor, AXES, FRESH_MOVES};
+use super::local::{local_pattern, Judged, FRESH_MOVES};
+use super::{Monitor, AXES};
 use crane_model::{Axis, Direction};
 
 /// What the local check of one map sees ([`Monitor::local_state`]).

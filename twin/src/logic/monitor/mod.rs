@@ -37,15 +37,20 @@ pub mod alarm;
 pub mod breakaway;
 pub mod frame;
 pub mod inspect;
+mod local;
 pub mod map;
+mod median;
+mod settings;
 
-use super::control::LoopConfig;
 use super::observer::Observer;
 use alarm::{Alarm, AlarmKind, Debounce};
 use breakaway::{BreakawayWatch, Limits, Sense};
 use crane_model::friction::dry_at;
 use crane_model::{Axis, Direction, Mode, Real};
-use map::{MapSettings, SlidingMap, BINS};
+use local::{local_pattern, Judged, Local};
+use map::{SlidingMap, BINS};
+use median::median_of_split_keys;
+pub use settings::Settings;
 
 /// Drive axes watched: the trolley's X and Y. The rope drive is not watched: its residual
 /// carries the payload's weight and the swing's tension, not only friction, and it moves in
@@ -55,149 +60,6 @@ pub const AXES: [Axis; 2] = [Axis::X, Axis::Y];
 
 /// Number of watched axes.
 const N: usize = AXES.len();
-
-/// Monitor settings, all derived from the loop (period, observer gains, encoder) by
-/// [`Settings::for_loop`].
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Settings {
-    /// How the maps learn.
-    pub map: MapSettings,
-    /// Alarm threshold in standard deviations of the learned scatter. 5: a Gaussian level
-    /// passes it with probability 2.9e-7; the maps give about 10^4 independent looks an hour
-    /// (64 bins, 6 maps, about 25 passes), and two confirmations are needed.
-    pub k: f32,
-    /// Threshold of the local check in standard deviations of a bin's band. Lower than `k`:
-    /// a local change is confirmed by a second, independent pass over the same bins (or by
-    /// the other direction's map), so the chance of a false one is about the square of a
-    /// single tail (4: 3.2e-5 squared).
-    pub k_local: f32,
-    /// The control period [s].
-    pub period: f32,
-    /// Least periods of commissioning (nothing judged); it ends on coverage
-    /// ([`Monitor::commissioned`]), not before this.
-    pub commissioning: u64,
-    /// Periods an axis must have slid before its samples are used (observer transient).
-    pub settle: u32,
-    /// Lag [s] of the disturbance estimate behind the plant: a sample taken at `x` moving at
-    /// `v` is filed at `x - v lag`, so both directions' maps put a rough spot at its place.
-    pub lag: f32,
-    /// Least speed [m/s] of a sample per axis: two encoder steps per period.
-    pub v_min: [f32; N],
-    /// Periods the twin must hold an axis stopped before it rests (a reversal is no rest).
-    pub min_stop: u32,
-    /// Distance [m] per axis the position must leave its place at rest to count as a restart:
-    /// the observer's stick band (quantisation and count noise stay within it).
-    pub band: [f32; N],
-    /// The encoder's step [m] per axis: a reading out of the count of the place at rest is
-    /// the onset of a breakaway ([`breakaway`]).
-    pub quantum: [f32; N],
-    /// `1 - alpha`, the observer's position gain's complement: the encoder reading is the
-    /// position estimate plus this times the observer's innovation.
-    pub reading_gain: f32,
-    /// Most bins out of band that still make a local change (more is a travel-wide one).
-    pub local_bins: usize,
-    /// Moves of a map over which the travel level's band is learned before it is judged.
-    pub level_learn: u32,
-    /// Restarts per direction over which the breakaway ratio is learned before it is judged.
-    pub restarts_learn: u16,
-}
-
-impl Settings {
-    /// Settings for a loop `cfg`: the settle time from the observer's pole (`theta^3 = 1 -
-    /// alpha`, the transient below 1 %), the least speed from the encoder step, commissioning
-    /// on coverage alone (no least time), 50 ms at rest for a breakaway, and a local change up to 4 bins wide
-    /// (3 cm on X: a rough spot, not a region).
-    pub fn for_loop(cfg: &LoopConfig) -> Self {
-        let t3 = 1.0 - cfg.gains.alpha;
-        let mut p = 1.0;
-        let mut settle = 0u32;
-        while p > 1e-6 && settle < 10_000 && t3 > 0.0 && t3 < 1.0 {
-            p *= t3;
-            settle += 1;
-        }
-        let per = if cfg.period > 0.0 { cfg.period } else { 2e-3 };
-        let v = |i: usize| (2.0 * cfg.scale.res[i] / per) as f32;
-        let k = 5.0;
-        Settings {
-            map: MapSettings {
-                gate: k * k,
-                ..MapSettings::default()
-            },
-            k,
-            k_local: 4.5,
-            period: per as f32,
-            commissioning: 0,
-            settle,
-            lag: lag_periods(cube_root(t3)) as f32 * per as f32,
-            v_min: [v(0), v(1)],
-            min_stop: (0.05 / per) as u32,
-            band: [
-                cfg.gains.stick_band[0] as f32,
-                cfg.gains.stick_band[1] as f32,
-            ],
-            quantum: [cfg.scale.res[0] as f32, cfg.scale.res[1] as f32],
-            reading_gain: t3 as f32,
-            local_bins: 4,
-            level_learn: 16,
-            restarts_learn: breakaway::WARM,
-        }
-    }
-}
-
-impl Settings {
-    /// A short commissioning for the QEMU cross-check: at least 20 s, bins judged from 64
-    /// samples (the band learned over the 48 after the first 16: two passes at the map's mean
-    /// speed, about 26 samples each on X; over 32, one pass could hold them all and the band was
-    /// the scatter within it, a few hundredths of a newton, against which `CHECK`'s 2 N bump
-    /// was out of band over 5 bins, too wide for a local change), the travel level from 1
-    /// move, the breakaway from 4 restarts (on the rig's `CHECK` run every direction has them
-    /// by 15 s; with 3 moves X's positive direction had only 2 in the 45 s). It trades the
-    /// statistics' quality for a run short enough to simulate under QEMU; it is not for a rig.
-    pub fn quick(cfg: &LoopConfig) -> Self {
-        let per = if cfg.period > 0.0 { cfg.period } else { 2e-3 };
-        let s = Settings::for_loop(cfg);
-        Settings {
-            map: MapSettings {
-                warm: 16,
-                judged: 64,
-                ..s.map
-            },
-            commissioning: (20.0 / per) as u64,
-            level_learn: 1,
-            restarts_learn: 4,
-            ..s
-        }
-    }
-}
-
-/// Cube root of `x` in `[0, 1]` by Newton's iteration (no libm in this path).
-fn cube_root(x: f64) -> f64 {
-    if x <= 0.0 {
-        return 0.0;
-    }
-    let mut y = 1.0;
-    for _ in 0..60 {
-        y -= (y * y * y - x) / (3.0 * y * y);
-    }
-    y
-}
-
-/// Lag of the disturbance estimate in periods for an observer pole `theta`: the mean delay
-/// of its response to a force, `LAG_POLES theta / (1 - theta)`, the time constant of one
-/// pole times the number of poles the estimate goes through. The alpha-beta-gamma filter
-/// has three at `theta`: a force impulse shows in its disturbance estimate with the centroid
-/// 27.7 periods later at the default gains (3 x 9.06 + 0.5: the impulse response of the
-/// filter's recursion, computed), 55 ms. (With one pole, 18 ms, the two directions' maps
-/// put the bump of the rig 12 mm apart at 0.2 m/s: the 37 ms missing, each way.)
-fn lag_periods(theta: f64) -> f64 {
-    if theta <= 0.0 || theta >= 1.0 {
-        return 0.0;
-    }
-    LAG_POLES * theta / (1.0 - theta)
-}
-
-/// Poles of the observer the disturbance estimate goes through (see [`lag_periods`]).
-const LAG_POLES: f64 = 3.0;
 
 // The monitor's memory bound (issue 21: the maps under 8 KiB), on every target.
 const _: () = assert!(Monitor::RAM_BYTES < 8 * 1024);
@@ -233,52 +95,15 @@ pub struct Coverage {
     pub restarts: u16,
     /// Moves that gave the travel's level (each over at least [`MOVE_BINS`] judged bins).
     pub moves: u32,
-    /// Bins with enough samples to be judged ([`MapSettings::judged`]).
+    /// Bins with enough samples to be judged ([`MapSettings::judged`](map::MapSettings::judged)).
     pub judged: u8,
 }
-
-/// Bins each side of a local stretch (past one bin of flank) it is compared with, at most.
-const FLANK: usize = 3;
-
-/// Moves of a map within which a bin must have had a sample to be judged by the local
-/// check: a bin not crossed for longer is stale evidence while the travel changes slowly.
-const FRESH_MOVES: u16 = 8;
 
 /// Weight of a move's level in its band once learned: about 256 moves.
 const LEVEL_SLOW: f32 = 1.0 / 256.0;
 /// Judged bins a move must cross to give a level (a median of fewer is no travel level: a
 /// rough spot of up to `local_bins` would move it).
 pub const MOVE_BINS: usize = 9;
-
-/// Median of the `f32` values whose [`map::total_key`]s are `keys[..below]` and
-/// `keys[BINS - above..]` (reordered), 0 if there are none: the element at
-/// `(below + above) / 2` in [`f32::total_cmp`]'s order. Every key of the first part is
-/// below every key of the second ([`SlidingMap::judged_bands`] split them around a pivot), so
-/// the element is selected in the one part that holds it: about half the keys when the
-/// pivot is near the median (the travel's previous level). Any selection gives that element,
-/// bit for bit, as `select_nth_unstable_by(n / 2, f32::total_cmp)` on the `f32`s did (the
-/// keys have the same order); on the integer keys a comparison is one instruction.
-fn median_of_split_keys(keys: &mut [i32; BINS], below: usize, above: usize) -> f32 {
-    let k = (below + above) / 2;
-    let m = if k < below {
-        keys.get_mut(..below).and_then(|a| select_key(a, k))
-    } else {
-        let from = BINS.saturating_sub(above);
-        keys.get_mut(from..).and_then(|a| select_key(a, k - below))
-    };
-    m.map_or(0.0, map::from_total_key)
-}
-
-/// The `k`-th smallest of `a` (0-based; `a` is reordered), `None` unless `k < a.len()`:
-/// `select_nth_unstable` (introselect, linear in the worst case), kept out of line (inlined
-/// into [`Monitor::move_done`] it measured twice the instructions).
-#[inline(never)]
-fn select_key(a: &mut [i32], k: usize) -> Option<i32> {
-    if k >= a.len() {
-        return None;
-    }
-    Some(*a.select_nth_unstable(k).1)
-}
 
 /// The slow level of one axis' residual mean square.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -441,8 +266,9 @@ impl Monitor {
     /// Whether the statistics every check needs are learned: on every watched axis and in
     /// each direction the breakaway ratio over [`Settings::restarts_learn`] restarts and the
     /// travel's level over [`Settings::level_learn`] moves that each crossed at least
-    /// [`MOVE_BINS`] judged bins (bins with [`MapSettings::judged`] samples), and the
-    /// residual level of every axis over [`RESIDUAL_LEARN`] periods.
+    /// [`MOVE_BINS`] judged bins (bins with
+    /// [`MapSettings::judged`](map::MapSettings::judged) samples), and the residual level of
+    /// every axis over [`RESIDUAL_LEARN`] periods.
     pub fn covered(&self) -> bool {
         let residual = self
             .residual
@@ -887,260 +713,6 @@ impl Monitor {
                 period: self.period,
             };
             self.push(alarm);
-        }
-    }
-}
-
-/// A local pattern in a map: the contiguous stretch around the bin furthest out of band.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Local {
-    peak: usize,
-    position: f32,
-    width: f32,
-    change: f32,
-}
-
-/// What [`local_pattern`] made of a map.
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum Judged {
-    /// A local pattern.
-    Local(Local),
-    /// No local pattern.
-    Clear,
-    /// A stretch out of band whose flanks the pass that crossed it has not both crossed (yet):
-    /// no evidence either way.
-    Unjudged,
-}
-
-/// The stretch of bins out of band (beyond the travel's level `level`) around the worst
-/// one, if it is at most `max_bins` wide and at most `max_bins` other bins are out of band.
-///
-/// One pass over the map decides which bins are out of band
-/// ([`SlidingMap::out_of_band`]); the stretch and its change then read only the bins it
-/// marked (the change of a marked bin recomputed as `deviation - level`, the same value), so
-/// no bin's band test is done twice.
-fn local_pattern(
-    map: &SlidingMap,
-    s: &MapSettings,
-    level: f32,
-    pooled: f32,
-    k2: f32,
-    max_bins: usize,
-) -> Judged {
-    let scan = map.out_of_band(s, FRESH_MOVES, level, pooled, k2);
-    let Some((peak, peak_e)) = scan.peak else {
-        return Judged::Clear;
-    };
-    let count = scan.count;
-    let sign = if peak_e < 0.0 { -1.0 } else { 1.0 };
-    // A bin out of band on the peak's side: its change beyond the level [N].
-    let same = |b: usize| -> Option<f32> {
-        if scan.mask.checked_shr(b as u32).unwrap_or(0) & 1 == 0 {
-            return None;
-        }
-        let e = map.deviation(b) - level;
-        (e * sign > 0.0).then_some(e)
-    };
-    let mut lo = peak;
-    while lo > 0 && same(lo - 1).is_some() {
-        lo -= 1;
-    }
-    let mut hi = peak;
-    while hi + 1 < BINS && same(hi + 1).is_some() {
-        hi += 1;
-    }
-    let len = hi - lo + 1;
-    if len > max_bins || count > len + max_bins {
-        return Judged::Clear;
-    }
-    // The stretch must stand out against its neighbours on both sides, past one bin of
-    // flank (up to three judged bins each side), measured in the same pass: crossed by the
-    // move that last crossed the peak (the same age), compared with the side closer to it.
-    // Right after a change of the whole travel, the bins a move has just crossed slowly are
-    // updated and look alone against a median that has not moved yet, but their neighbours
-    // moved with them. And a move that starts or stops in the stretch, or next to it, is no
-    // pass over it: its slow end differs from the passes the reference learned from (the
-    // swing's pull, which the twin gets wrong with the payload's mass, is largest there), and
-    // it has no flank beyond its end. Measured on the rig's held-out seeds: the false
-    // `local_friction` alarms looked at (0.28-0.41 N dips) were where a move began or ended,
-    // confirmed by another such move (42 and 101 moves later, or the next move the other
-    // way); with the rig's payload set to the twin's, the dip of seed 1018 was gone. Until both flanks are crossed the stretch
-    // is not judged ([`Judged::Unjudged`]): no evidence either way.
-    let age = map.view(peak, s).age;
-    let side = |bins: core::ops::Range<usize>| -> Option<f32> {
-        let mut sum = 0.0f32;
-        let mut n = 0u8;
-        for b in bins {
-            let v = map.view(b, s);
-            if v.judged && v.age == age {
-                sum += v.deviation - level;
-                n += 1;
-            }
-        }
-        (n > 0).then(|| sum / f32::from(n))
-    };
-    let left = side(lo.saturating_sub(FLANK + 1)..lo.saturating_sub(1));
-    let right = side((hi + 2).min(BINS)..(hi + 2 + FLANK).min(BINS));
-    let (Some(a), Some(b)) = (left, right) else {
-        return Judged::Unjudged;
-    };
-    let closer = if (peak_e - a) * sign < (peak_e - b) * sign {
-        a
-    } else {
-        b
-    };
-    let contrast = peak_e - closer;
-    let band = map.view(peak, s).band.max(pooled);
-    if contrast * sign <= 0.0 || contrast * contrast <= k2 * band {
-        return Judged::Clear;
-    }
-    let mut wsum = 0.0f32;
-    let mut xsum = 0.0f32;
-    let mut change = 0.0f32;
-    for b in lo..=hi {
-        let e = same(b).unwrap_or(0.0);
-        wsum += e;
-        xsum += e * map.center(b);
-        if e * sign > change * sign {
-            change = e;
-        }
-    }
-    let position = if wsum != 0.0 {
-        xsum / wsum
-    } else {
-        map.center(peak)
-    };
-    Judged::Local(Local {
-        peak,
-        position,
-        width: len as f32 * map.bin_width(),
-        change,
-    })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The old median: `select_nth_unstable_by(n / 2, f32::total_cmp)` on the `f32`s.
-    fn median_by_total_cmp(v: &mut [f32]) -> f32 {
-        let n = v.len();
-        if n == 0 {
-            return 0.0;
-        }
-        *v.select_nth_unstable_by(n / 2, f32::total_cmp).1
-    }
-
-    /// A map over [0, 0.64] m (10 mm bins) whose bins 5..40 are judged, with passes that
-    /// scatter by 0.05 N, then one more move over `from..to` (bins, increasing) in which bins
-    /// 20 and 21 read 1 N more.
-    fn map_with_a_last_move(from: usize, to: usize) -> (SlidingMap, MapSettings) {
-        let s = MapSettings::default();
-        let mut m = SlidingMap::new(0.0, 0.64);
-        let x = |b: usize| (b as f32 + 0.5) * 0.01;
-        for pass in 0..40 {
-            let r = if pass % 2 == 0 { 0.05 } else { -0.05 };
-            for b in 5..40 {
-                for _ in 0..16 {
-                    m.add(x(b), 0.2, r, &s, true);
-                }
-            }
-            m.end_move();
-        }
-        for b in from..to {
-            let r = if b == 20 || b == 21 { 1.0 } else { 0.05 };
-            for _ in 0..16 {
-                m.add(x(b), 0.2, r, &s, true);
-            }
-        }
-        (m, s)
-    }
-
-    #[test]
-    fn a_move_that_ends_at_a_stretch_is_no_pass_over_it() {
-        let judge = |from, to| {
-            let (m, s) = map_with_a_last_move(from, to);
-            let pooled = m.view(30, &s).band;
-            local_pattern(&m, &s, 0.0, pooled, 4.5 * 4.5, 4)
-        };
-        // Crossed with both flanks (bins 16..19 and 23..26): a local change at 0.21 m.
-        let crossed = judge(10, 30);
-        assert!(
-            matches!(crossed, Judged::Local(l) if (l.position - 0.21).abs() < 0.006),
-            "{crossed:?}"
-        );
-        // The move ends right after the stretch, or begins right before it: not judged.
-        assert_eq!(judge(10, 23), Judged::Unjudged);
-        assert_eq!(judge(19, 30), Judged::Unjudged);
-    }
-
-    #[test]
-    fn the_median_of_the_keys_is_the_total_cmp_median_bit_for_bit() {
-        let mut rng = crane_ident::rng::Rng::new(0x2545_f491_4f6c_dd1d);
-        let mut next = || rng.next_u64();
-        let specials = [0.0f32, -0.0, 1.0, -1.0, f32::MIN_POSITIVE, -f32::MAX, 1e-3];
-        for round in 0..4000 {
-            let n = (next() % (BINS as u64 + 1)) as usize;
-            let mut v = [0.0f32; BINS];
-            for x in v.iter_mut().take(n) {
-                let r = next();
-                *x = match round % 4 {
-                    // few distinct values: many ties
-                    0 => specials[(r % specials.len() as u64) as usize],
-                    // sorted runs and reversed runs
-                    1 => (r % 16) as f32 * 0.125 - 1.0,
-                    _ => (r as i64 as f64 / 1e18) as f32,
-                };
-            }
-            if round % 8 == 1 {
-                v[..n].sort_by(f32::total_cmp);
-            } else if round % 8 == 3 {
-                v[..n].sort_by(|a, b| b.total_cmp(a));
-            }
-            // Split around a pivot as `SlidingMap::judged_bands` does: one of the values, or
-            // a value of its own.
-            let pivot = if n > 0 && round % 3 == 0 {
-                map::total_key(v[(next() % n as u64) as usize])
-            } else {
-                map::total_key((next() as i64 as f64 / 4e18) as f32)
-            };
-            let mut keys = [0i32; BINS];
-            let (mut below, mut above) = (0usize, 0usize);
-            for x in &v[..n] {
-                let key = map::total_key(*x);
-                if key < pivot {
-                    keys[below] = key;
-                    below += 1;
-                } else {
-                    above += 1;
-                    keys[BINS - above] = key;
-                }
-            }
-            let got = median_of_split_keys(&mut keys, below, above);
-            let want = median_by_total_cmp(&mut v[..n]);
-            assert_eq!(got.to_bits(), want.to_bits(), "round {round}, n {n}");
-            // Every rank, against a sort.
-            if n > 0 && round % 16 == 0 {
-                let mut sorted = v;
-                sorted[..n].sort_by(f32::total_cmp);
-                for (rank, want) in sorted.iter().enumerate().take(n) {
-                    let mut keys = [0i32; BINS];
-                    for (k, x) in keys.iter_mut().zip(&v[..n]) {
-                        *k = map::total_key(*x);
-                    }
-                    let got = select_key(&mut keys[..n], rank).map(map::from_total_key);
-                    assert_eq!(got.map(f32::to_bits), Some(want.to_bits()));
-                }
-            }
-        }
-        let mut keys = [0i32; BINS];
-        assert_eq!(select_key(&mut keys[..3], 3), None);
-        assert_eq!(median_of_split_keys(&mut keys, 0, 0), 0.0);
-        for x in [0.0f32, -0.0, 1.5, -2.25, f32::INFINITY, f32::NEG_INFINITY] {
-            assert_eq!(
-                map::from_total_key(map::total_key(x)).to_bits(),
-                x.to_bits()
-            );
         }
     }
 }
