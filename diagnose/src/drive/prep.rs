@@ -427,6 +427,36 @@ pub fn onset(p: &Prepared, i: usize, sign: f64) -> usize {
     (j + p.w.saturating_sub(1)).min(i)
 }
 
+/// Where the position left its rest before an onset `o` ([`onset`], direction `sign`): the
+/// last sample whose position is within the rest's own scatter of the rest position. The rest
+/// is the stretch before `o` whose velocity stays within `v_move`; its first half gives the
+/// position (median) and the scatter (largest distance from it). A velocity threshold is
+/// crossed late where the friction falls off gradually with speed (velocity weakening): the
+/// axis then leaves rest slowly, and under a ramp the force at the velocity's onset is above
+/// the level at which it left. `o` itself when the rest is shorter than 8 samples or the
+/// position did not leave it earlier. Never after `o`.
+pub fn departure(p: &Prepared, o: usize, sign: f64, v_move: f64) -> usize {
+    let x = &p.run.x;
+    let mut r = o;
+    while r > 0 && p.v[r - 1].abs() <= v_move {
+        r -= 1;
+    }
+    let len = o - r;
+    if len < 8 {
+        return o;
+    }
+    let half = &x[r..r + len / 2];
+    let mut sorted = half.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let rest = sorted[sorted.len() / 2];
+    let band = half.iter().map(|q| (q - rest).abs()).fold(0.0, f64::max);
+    let mut j = o;
+    while j > r + len / 2 && sign * (x[j - 1] - rest) > band {
+        j -= 1;
+    }
+    j
+}
+
 /// Whether a run moves at all (a motion in either direction).
 pub fn moves(v: &[f64], v_th: f64) -> bool {
     !motions(v, v_th, 1.0).is_empty() || !motions(v, v_th, -1.0).is_empty()
@@ -624,5 +654,38 @@ mod tests {
                 "w {w}: onset {o} (threshold at {i})"
             );
         }
+    }
+
+    #[test]
+    fn a_slow_departure_is_found_on_the_position_before_the_velocity_onset() {
+        // at rest with one count of flicker until sample 200, then x = c (k - 200)^4: the
+        // acceleration grows from 0 as under velocity weakening (the friction falls off only
+        // as the axis speeds up); the position leaves the flicker's band at sample 206
+        let (dt, q) = (1e-3, 1e-6);
+        let x: Vec<f64> = (0..400)
+            .map(|k| {
+                if k < 200 {
+                    if k % 3 == 0 {
+                        q
+                    } else {
+                        0.0
+                    }
+                } else {
+                    1e-9 * ((k - 200) as f64).powi(4)
+                }
+            })
+            .collect();
+        let p = Prepared::with_window(run(dt, x), W);
+        let v_peak = p.v.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let v_move = MOVE_FRACTION * v_peak;
+        let i = motions(&p.v, v_move, 1.0)[0].0;
+        let o = onset(&p, i, 1.0);
+        let d = departure(&p, o, 1.0, v_move);
+        assert!(o > 212, "the velocity's onset is late: {o}");
+        assert!((204..=208).contains(&d), "departure {d} (onset {o})");
+        // the other direction never departs before its onset
+        assert_eq!(departure(&p, o, -1.0, v_move), o);
+        // a rest shorter than 8 samples gives the onset itself
+        assert_eq!(departure(&p, 5, 1.0, v_move), 5);
     }
 }
