@@ -446,9 +446,11 @@ pub fn departure(p: &Prepared, o: usize, sign: f64, v_move: f64) -> usize {
         return o;
     }
     let half = &x[r..r + len / 2];
-    let mut sorted = half.to_vec();
-    sorted.sort_by(f64::total_cmp);
-    let rest = sorted[sorted.len() / 2];
+    // the middle order statistic by selection (linear), not a sort: this runs at every onset
+    // of every Stribeck grid point
+    let mut order = half.to_vec();
+    let mid = order.len() / 2;
+    let rest = *order.select_nth_unstable_by(mid, f64::total_cmp).1;
     let band = half.iter().map(|q| (q - rest).abs()).fold(0.0, f64::max);
     let mut j = o;
     while j > r + len / 2 && sign * (x[j - 1] - rest) > band {

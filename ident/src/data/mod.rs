@@ -523,9 +523,11 @@ pub fn axis_run(
         }
     };
     let mut notes = Vec::new();
-    let x_held = timebase::held_channel(&x).map_or(1, |(r, _)| r.max(1));
-    for (name, col) in [("x", &x), (u_name, &u)] {
-        if let Some((rows_per_refresh, repeated_share)) = timebase::held_channel(col) {
+    // each column's hold found once: the position's is also kept as `x_held`
+    let x_hold = timebase::held_channel(&x);
+    let x_held = x_hold.map_or(1, |(r, _)| r.max(1));
+    for (name, hold) in [("x", x_hold), (u_name, timebase::held_channel(&u))] {
+        if let Some((rows_per_refresh, repeated_share)) = hold {
             let idx = table.find(name, renames).unwrap_or(0);
             notes.push(LoadNote::HeldChannel {
                 column: clip(&table.header[idx]),
