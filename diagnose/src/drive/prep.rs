@@ -104,6 +104,9 @@ pub struct Prepared {
     /// when it exceeds the motion threshold (a log that starts mid-motion), else 0 (at rest,
     /// exactly, so noise never starts a resting axis moving). Set by [`Prepared::set_start`].
     pub v0: f64,
+    /// The motion threshold [`Prepared::v0`] was set with (infinite before
+    /// [`Prepared::set_start`]): [`Prepared::v_at`] reads a later start the same way.
+    pub v_move: f64,
 }
 
 impl Prepared {
@@ -121,15 +124,23 @@ impl Prepared {
             a,
             w,
             v0: 0.0,
+            v_move: f64::INFINITY,
+        }
+    }
+
+    /// The velocity a simulation started at sample `i` takes [m/s or rad/s]: the estimate
+    /// there when it exceeds the motion threshold, else 0 (as [`Prepared::v0`] at sample 0).
+    pub fn v_at(&self, i: usize) -> f64 {
+        match self.v.get(i) {
+            Some(&v) if v.abs() > self.v_move => v,
+            _ => 0.0,
         }
     }
 
     /// Sets [`Prepared::v0`] from the motion threshold `v_move` [m/s or rad/s].
     pub fn set_start(&mut self, v_move: f64) {
-        self.v0 = match self.v.first() {
-            Some(&v) if v.abs() > v_move => v,
-            _ => 0.0,
-        };
+        self.v_move = v_move;
+        self.v0 = self.v_at(0);
     }
 }
 

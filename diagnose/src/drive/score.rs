@@ -29,18 +29,27 @@ pub fn delayed_input(u: &[f64], s: &Structure) -> Vec<f64> {
 }
 
 /// Simulates a fitted model on a run, from the run's first position and its start velocity
-/// ([`Prepared::v0`]: 0 unless the log starts mid-motion).
+/// ([`Prepared::v0`]: 0 unless the log starts mid-motion). With an input delay of `d`
+/// samples the input of the first `ceil d` samples was sent before the record began and is
+/// unknown: those samples are the measured positions, and the simulation starts after them
+/// from the measured position and velocity there ([`Prepared::v_at`]). Holding the first
+/// recorded input over them instead drove a log that begins with a command for a delay it
+/// never had (a 0.1 s delay on a 10 kHz log of pulses that starts with one read as 87 ms).
 pub fn simulate(est: &Estimate, run: &Prepared) -> Result<Vec<f64>, SimulateError> {
     let mut p = est.params;
     p.deadband = est.structure.deadband;
-    let x0 = run.run.x.first().copied().unwrap_or(0.0);
-    simulate_drive(
-        &p,
-        x0,
-        run.v0,
-        run.run.dt,
-        &delayed_input(&run.run.u, &est.structure),
-    )
+    let u = delayed_input(&run.run.u, &est.structure);
+    let x = &run.run.x;
+    // the first sample whose delayed input was recorded (none past the run's last sample)
+    let start = (est.structure.delay.max(0.0).ceil() as usize).min(x.len().saturating_sub(1));
+    if start == 0 {
+        let x0 = x.first().copied().unwrap_or(0.0);
+        return simulate_drive(&p, x0, run.v0, run.run.dt, &u);
+    }
+    let tail = simulate_drive(&p, x[start], run.v_at(start), run.run.dt, &u[start..])?;
+    let mut out = x[..start].to_vec();
+    out.extend(tail);
+    Ok(out)
 }
 
 /// Position NMAE [%]: mean absolute error over the measured position range (floored at the
@@ -243,5 +252,69 @@ mod tests {
         assert_eq!(back, r);
         assert_eq!(nmae_or_diverged::text(f64::INFINITY, 2), "diverged");
         assert_eq!(nmae_or_diverged::text(3.254, 2), "3.25 %");
+    }
+
+    #[test]
+    fn a_delayed_model_starts_where_its_input_was_recorded() {
+        use crate::drive::estimate::DryLevel;
+        use crate::drive::prep::DriveRun;
+        // a log that begins with a command (5 against a dry level of 1); the axis, 20
+        // samples late, is at rest over them
+        let n = 60;
+        let u: Vec<f64> = (0..n).map(|k| if k < 10 { 5.0 } else { 0.0 }).collect();
+        let run = DriveRun {
+            name: "a.csv".into(),
+            held_out: false,
+            dt: 0.01,
+            x: vec![0.25; n],
+            u,
+            refresh: 1,
+            input_at: (0..n).map(|k| k as f64 * 0.01).collect(),
+            read_at: (0..n).map(|k| k as f64 * 0.01).collect(),
+        };
+        let mut run = Prepared::with_window(run, 2);
+        run.set_start(1e-3);
+        let params = crane_model::drive::DriveParams {
+            inertia: 1.0,
+            viscous_pos: 1.0,
+            viscous_neg: 1.0,
+            kinetic_pos: 1.0,
+            kinetic_neg: 1.0,
+            breakaway_pos: 1.0,
+            breakaway_neg: 1.0,
+            ..Default::default()
+        };
+        let mut est = Estimate {
+            params,
+            structure: Structure {
+                restoring: false,
+                stiction: false,
+                asymmetric: false,
+                offset: false,
+                deadband: 0.0,
+                delay: 19.5,
+                saturation: 0.0,
+                load: 0.0,
+                bump: None,
+                stribeck: 0.0,
+            },
+            flags: Vec::new(),
+            first_motion: [Vec::new(), Vec::new()],
+            breakaway_scatter: [None, None],
+            kinetic_ls: [1.0, 1.0],
+            slip_gaps: [Vec::new(), Vec::new()],
+            rows: n,
+            level: DryLevel::FirstMotion,
+        };
+        let sim = simulate(&est, &run).expect("simulates");
+        assert_eq!(sim.len(), n);
+        // the first ceil(19.5) samples are the record; the model starts there, at rest, and
+        // is then driven by the first recorded command
+        assert!(sim[..=20].iter().all(|&x| x == 0.25), "{:?}", &sim[..22]);
+        assert!(sim[22] > 0.25, "{}", sim[22]);
+        // without a delay the command drives it from the first sample
+        est.structure.delay = 0.0;
+        let sim = simulate(&est, &run).expect("simulates");
+        assert!(sim[2] > 0.25, "{}", sim[2]);
     }
 }
