@@ -28,6 +28,11 @@
 //! wall, 41.1 s user (`663c068` right after it: 60.1 s wall, 59.7 s user); `cicese_joint1`
 //! 0.54 s (`663c068`: 0.74 s). Earlier, shared (load 4-5): 63.0 s wall against 108.5 s.
 //! README's table.
+//! 2026-11-28 17:10 UTC, idle, one `crane diagnose` of a Python-written log like the bench's
+//! (the same carriage and pulses, 10 kHz x 2 x 60 s): 12.0 s (12.3 s before the delay's
+//! output-error refinement); the same log with a 0.1 s input delay: 137 s (62 s before; the
+//! delay's valley scan and Nelder-Mead restarts, each iteration a simulation of the 60 s
+//! fitting run): over the 60 s goal for a delayed log of that length (not benchmarked here).
 
 use crane_diagnose::{diagnose, DiagnoseOptions};
 use crane_ident::rng::Rng;

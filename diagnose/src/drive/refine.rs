@@ -338,12 +338,13 @@ fn polish(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::drive::estimate::{DryLevel, Structure};
     use crane_model::drive::DriveParams;
 
-    fn estimate(inertia: f64, viscous: [f64; 2], dry: [f64; 2]) -> Estimate {
+    /// A fitted model of the plain structure (asymmetric, nothing else), for tests.
+    pub(crate) fn estimate(inertia: f64, viscous: [f64; 2], dry: [f64; 2]) -> Estimate {
         Estimate {
             params: DriveParams {
                 inertia,

@@ -256,7 +256,6 @@ mod tests {
 
     #[test]
     fn a_delayed_model_starts_where_its_input_was_recorded() {
-        use crate::drive::estimate::DryLevel;
         use crate::drive::prep::DriveRun;
         // a log that begins with a command (5 against a dry level of 1); the axis, 20
         // samples late, is at rest over them
@@ -274,38 +273,8 @@ mod tests {
         };
         let mut run = Prepared::with_window(run, 2);
         run.set_start(1e-3);
-        let params = crane_model::drive::DriveParams {
-            inertia: 1.0,
-            viscous_pos: 1.0,
-            viscous_neg: 1.0,
-            kinetic_pos: 1.0,
-            kinetic_neg: 1.0,
-            breakaway_pos: 1.0,
-            breakaway_neg: 1.0,
-            ..Default::default()
-        };
-        let mut est = Estimate {
-            params,
-            structure: Structure {
-                restoring: false,
-                stiction: false,
-                asymmetric: false,
-                offset: false,
-                deadband: 0.0,
-                delay: 19.5,
-                saturation: 0.0,
-                load: 0.0,
-                bump: None,
-                stribeck: 0.0,
-            },
-            flags: Vec::new(),
-            first_motion: [Vec::new(), Vec::new()],
-            breakaway_scatter: [None, None],
-            kinetic_ls: [1.0, 1.0],
-            slip_gaps: [Vec::new(), Vec::new()],
-            rows: n,
-            level: DryLevel::FirstMotion,
-        };
+        let mut est = crate::drive::refine::tests::estimate(1.0, [1.0, 1.0], [1.0, 1.0]);
+        est.structure.delay = 19.5;
         let sim = simulate(&est, &run).expect("simulates");
         assert_eq!(sim.len(), n);
         // the first ceil(19.5) samples are the record; the model starts there, at rest, and
