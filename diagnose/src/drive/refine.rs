@@ -300,9 +300,9 @@ impl argmin::core::CostFunction for Factors<'_> {
 /// The coordinate search's result `best` (error `err`) polished by a Nelder-Mead simplex
 /// over every tuned parameter at once (`argmin`), or `None` when it finds nothing better. A
 /// delay and the inertia trade along a narrow valley (both lag the response: about
-/// `delay + J / D`), where one coordinate at a time crawls: on stranger plants with a 0.17-0.19 s
-/// delay the coordinate search stopped at 10-20 times the fitting error of the true
-/// parameters, 4-20 samples off the delay. The simplex starts 10 % along each coordinate
+/// `delay + J / D`), where one coordinate at a time crawls: on stranger plants with a 0.16-0.19 s
+/// delay the coordinate search stopped at 5-19 times the fitting error of the true
+/// parameters, 6-100 samples off the delay. The simplex starts 10 % along each coordinate
 /// (the delay: 2 %) and stops after [`POLISH_ITERS`] or when its errors agree within 1e-4 of
 /// `err`.
 fn polish(

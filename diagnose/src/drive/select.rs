@@ -305,8 +305,8 @@ fn pick(
 /// error on the fitting runs ([`super::refine`]), kept when that cuts the held-out error. The
 /// grid's delay is fitted by least squares at each point, whose derivative-based inertia can
 /// be low (a held or jittered position): the missing inertial lag is then taken up by the
-/// delay (stranger plants with 13-186 ms delays: 4-24 % long, with the inertia 11-34 % low,
-/// before this step).
+/// delay (stranger plants with 0.13-0.19 s delays: 3-24 % long, with the inertia 11-34 % low,
+/// or 1,500 times, before this step).
 ///
 /// `refined`: that refinement, where the output-error test of the selection already ran it.
 fn settle_delay(ctx: &Context<'_>, scored: Scored, refined: Option<Scored>) -> Scored {
