@@ -21,6 +21,11 @@ pub const MAX_DELAY: usize = 8;
 /// grid is [`delay_grid`].
 pub const MAX_DELAY_S: f64 = 0.25;
 
+/// The golden section's shrink factor per step, `(sqrt 5 - 1) / 2` (the f64 nearest it,
+/// bit for bit what `0.5 * (5f64.sqrt() - 1.0)` gives), for every golden-section search here
+/// and in [`super::refine`].
+pub const GOLDEN: f64 = 0.618_033_988_749_894_9;
+
 /// The delays tried [samples]: 1, 2, 3, 4, then steps of about `sqrt 2` up to the larger of
 /// [`MAX_DELAY_S`] and [`MAX_DELAY`] samples, at most a quarter of the shortest fitting run
 /// (a longer delay leaves too little of a run to fit). The best point is refined to the
@@ -123,7 +128,7 @@ fn golden<T>(
     if b <= a || steps < 2 {
         return;
     }
-    let g = 0.5 * (5f64.sqrt() - 1.0);
+    let g = GOLDEN;
     let (mut c, mut d) = (b - g * (b - a), a + g * (b - a));
     let r = eval(c);
     let mut fc = keep(best, k, c, r);
@@ -210,6 +215,11 @@ pub fn integer<T>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_golden_constant_is_the_computed_ratio_bit_for_bit() {
+        assert_eq!(GOLDEN.to_bits(), (0.5 * (5f64.sqrt() - 1.0)).to_bits());
+    }
 
     #[test]
     fn continuous_refines_between_neighbours_and_flags_edges() {

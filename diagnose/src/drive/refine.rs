@@ -25,6 +25,7 @@
 //! iterations in all, 4-8 s of a diagnosis.
 
 use super::estimate::Estimate;
+use super::grid::GOLDEN;
 
 /// Golden-section steps per parameter and sweep (the bracket shrinks to 0.618^12 = 0.3 % of
 /// its width: a factor of 1.003 on the parameter).
@@ -72,9 +73,6 @@ fn delay_steps(delay: f64, width: f64) -> usize {
     let n = (width / resolution).ln() / (1.0 / GOLDEN).ln();
     (n.ceil().max(0.0) as usize).clamp(STEPS, 48)
 }
-
-/// The golden ratio's inverse, the golden section's shrink factor per step.
-const GOLDEN: f64 = 0.618_033_988_749_894_8;
 
 /// `est` with parameter `p` multiplied by `factor`.
 fn scaled(est: &Estimate, p: Tuned, factor: f64) -> Estimate {
@@ -268,6 +266,7 @@ pub const POLISH_RESTARTS: usize = 8;
 pub const POLISH_ITERS: u64 = 400;
 
 /// The tuned parameters' log-factors as one point of [`polish`]'s search.
+#[derive(Clone, Copy)]
 struct Factors<'a> {
     /// The model the factors scale.
     base: &'a Estimate,
@@ -327,7 +326,7 @@ fn polish(
     let solver = argmin::solver::neldermead::NelderMead::new(simplex)
         .with_sd_tolerance(1e-4 * err)
         .ok()?;
-    let res = Executor::new(Factors { ..problem }, solver)
+    let res = Executor::new(problem, solver)
         .configure(|st| st.max_iters(POLISH_ITERS))
         .run()
         .ok()?;
