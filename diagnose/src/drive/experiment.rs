@@ -24,6 +24,21 @@ use rayon::prelude::*;
 /// better.
 pub const SLIDING_LEVEL_GAIN: f64 = 1.5;
 
+/// Fitting samples above which a delayed model is refined on the fitting runs' heads
+/// ([`Experiment::refine_delayed`]). The delay's refinement simulates the fitting runs
+/// 1,000-1,500 times (its Nelder-Mead polish along the delay's valley with the inertia,
+/// [`super::refine`]); on a 10 kHz log with a 60 s fitting run (600,000 samples, 0.08 s a
+/// simulation) that took 137 s of a 149 s diagnosis. The stranger plants' logs hold at most
+/// 180,000 rows in all, fitting and held-out: their refinement uses every fitting sample.
+pub const REFINE_SAMPLES: usize = 150_000;
+
+/// Starts from rest the heads of [`Experiment::refine_delayed`] hold at least (each one an
+/// observation of the lag between a command and the motion it starts; the heads grow until
+/// they hold these, up to the whole runs). A delay is one number and the inertia another: a
+/// few starts fix them on a clean log, and twenty leave the noise of each start a fifth of
+/// its weight (`1 / sqrt 20`).
+pub const REFINE_STARTS: usize = 20;
+
 /// Fitting and held-out runs with the thresholds derived from the fitting runs.
 pub struct Experiment<'a> {
     /// The runs the models are fitted on.
@@ -168,6 +183,56 @@ impl<'a> Experiment<'a> {
         })
     }
 
+    /// [`super::refine::refine_delayed`] on the fitting runs, with its result's
+    /// [`Experiment::fit_error`]. A delayed model on more than [`REFINE_SAMPLES`] fitting
+    /// samples is refined on the runs' heads (each run's first samples, the same fraction of
+    /// every run) that hold [`REFINE_SAMPLES`] and at least [`REFINE_STARTS`] starts from
+    /// rest, and kept when it also cuts the error of the whole runs.
+    pub fn refine_delayed(&self, est: &Estimate, dt: f64) -> Option<(Estimate, f64)> {
+        self.refine_delayed_within(est, dt, REFINE_SAMPLES)
+    }
+
+    /// [`Experiment::refine_delayed`] with heads of `budget` samples.
+    fn refine_delayed_within(
+        &self,
+        est: &Estimate,
+        dt: f64,
+        budget: usize,
+    ) -> Option<(Estimate, f64)> {
+        let whole = |e: &Estimate| self.fit_error(e);
+        let heads = (est.structure.delay > 0.0)
+            .then(|| self.heads(budget))
+            .flatten();
+        let Some(heads) = heads else {
+            return super::refine::refine_delayed(est, &whole, dt);
+        };
+        let short = Experiment::new(&heads, self.th, self.motion, self.center);
+        let (e, _) = super::refine::refine_delayed(est, &|e: &Estimate| short.fit_error(e), dt)?;
+        let (v, start) = rayon::join(|| self.fit_error(&e), || self.fit_error(est));
+        (v < start).then_some((e, v))
+    }
+
+    /// The fitting runs' heads for [`Experiment::refine_delayed_within`]: the same fraction
+    /// of every run, `budget` samples in all, doubled until they hold [`REFINE_STARTS`]
+    /// starts from rest; `None` when the runs hold no more than `budget` samples, or the
+    /// heads would be the whole runs.
+    fn heads(&self, budget: usize) -> Option<Vec<Prepared>> {
+        let total: usize = self.fit.iter().map(|r| r.run.x.len()).sum();
+        let mut fraction = budget as f64 / total as f64;
+        while fraction < 1.0 {
+            let heads: Vec<Prepared> = self
+                .fit
+                .iter()
+                .map(|r| r.head((fraction * r.run.x.len() as f64).ceil() as usize))
+                .collect();
+            if heads.iter().map(Prepared::starts).sum::<usize>() >= REFINE_STARTS {
+                return Some(heads);
+            }
+            fraction *= 2.0;
+        }
+        None
+    }
+
     /// A fitted model scored on the held-out runs, with its selection score (the mean over
     /// [`Experiment::selection_runs`]).
     pub fn score(&self, est: Estimate) -> Result<Scored, String> {
@@ -211,5 +276,98 @@ impl<'a> Experiment<'a> {
             refined,
             inertia_unknown,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::drive::prep::DriveRun;
+
+    /// A run of `n` samples at 1 kHz: pulses of 5 (0.3 s) of alternating sign, each followed
+    /// by 0.7 s of rest, positions simulated by `truth`.
+    fn pulses(truth: &Estimate, n: usize) -> Prepared {
+        let dt = 1e-3;
+        let u: Vec<f64> = (0..n)
+            .map(|k| match k % 2000 {
+                0..300 => 5.0,
+                1000..1300 => -5.0,
+                _ => 0.0,
+            })
+            .collect();
+        let run = |x: Vec<f64>| DriveRun {
+            name: "a.csv".into(),
+            held_out: false,
+            dt,
+            x,
+            u: u.clone(),
+            refresh: 1,
+            input_at: (0..n).map(|k| k as f64 * dt).collect(),
+            read_at: (0..n).map(|k| k as f64 * dt).collect(),
+        };
+        let mut rest = Prepared::with_window(run(vec![0.0; n]), 2);
+        rest.set_start(1e-3);
+        let x = simulate(truth, &rest).expect("simulates");
+        let mut p = Prepared::with_window(run(x), 2);
+        p.set_start(1e-3);
+        p
+    }
+
+    #[test]
+    fn a_long_delayed_log_is_refined_on_its_heads_and_judged_on_the_whole() {
+        let mut truth = crate::drive::refine::tests::estimate(0.5, [2.0, 2.0], [1.0, 1.0]);
+        truth.structure.delay = 20.0;
+        let runs = [pulses(&truth, 48_000)];
+        let th = Thresholds {
+            v_peak: 2.0,
+            v_move: 1e-3,
+            v_slide: 0.2,
+            quantum: 1e-9,
+        };
+        let ex = Experiment::new(&runs, th, Motion::Linear, 0.0);
+        // 48 s of pulses: 48 starts; heads of 6,000 samples hold 6, doubled to 24,000 (24)
+        assert_eq!(runs[0].starts(), 48);
+        let heads = ex.heads(6_000).expect("heads");
+        assert_eq!(heads[0].run.x.len(), 24_000);
+        assert_eq!(heads[0].starts(), 24);
+        assert_eq!(heads[0].v[..], runs[0].v[..24_000]);
+        assert_eq!(heads[0].run.read_at[..], runs[0].run.read_at[..24_000]);
+        // no heads when the runs are within the budget, or only the whole runs hold the starts
+        assert!(ex.heads(48_000).is_none());
+        assert!(ex.heads(20_000).is_some());
+        let short = [pulses(&truth, 20_000)];
+        assert!(Experiment::new(&short, th, Motion::Linear, 0.0)
+            .heads(6_000)
+            .is_none());
+        // the least squares' kind of error: the inertia low, the delay long by its lag
+        let mut est = truth.clone();
+        est.params.inertia = 0.2;
+        est.structure.delay += 0.3 / 2.0 / 1e-3;
+        let (e, v) = ex
+            .refine_delayed_within(&est, 1e-3, 6_000)
+            .expect("refined");
+        // the error returned is the whole run's, and the truth is found on the heads
+        assert_eq!(v.to_bits(), ex.fit_error(&e).to_bits());
+        assert!(v < ex.fit_error(&est));
+        assert!(
+            (e.structure.delay - 20.0).abs() < 1.0,
+            "{}",
+            e.structure.delay
+        );
+        assert!(
+            (e.params.inertia / 0.5 - 1.0).abs() < 0.05,
+            "{}",
+            e.params.inertia
+        );
+        // without a delay the whole runs are refined (the plain refinement)
+        let mut plain = est.clone();
+        plain.structure.delay = 0.0;
+        let fit_error = |e: &Estimate| ex.fit_error(e);
+        assert_eq!(
+            ex.refine_delayed_within(&plain, 1e-3, 6_000)
+                .map(|(e, v)| (e.params, v.to_bits())),
+            super::super::refine::refine_delayed(&plain, &fit_error, 1e-3)
+                .map(|(e, v)| (e.params, v.to_bits()))
+        );
     }
 }

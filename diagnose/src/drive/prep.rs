@@ -142,6 +142,40 @@ impl Prepared {
         self.v_move = v_move;
         self.v0 = self.v_at(0);
     }
+
+    /// The run's first `n` samples (all of it when it is shorter), with the derivatives and
+    /// start computed on the whole run: the same values sample for sample.
+    pub fn head(&self, n: usize) -> Prepared {
+        let n = n.min(self.run.x.len());
+        let cut = |v: &[f64]| v[..n.min(v.len())].to_vec();
+        Prepared {
+            run: DriveRun {
+                name: self.run.name.clone(),
+                held_out: self.run.held_out,
+                dt: self.run.dt,
+                x: cut(&self.run.x),
+                u: cut(&self.run.u),
+                refresh: self.run.refresh,
+                input_at: cut(&self.run.input_at),
+                read_at: cut(&self.run.read_at),
+            },
+            v: cut(&self.v),
+            a: cut(&self.a),
+            w: self.w,
+            v0: self.v0,
+            v_move: self.v_move,
+        }
+    }
+
+    /// Starts from rest: samples whose velocity estimate exceeds the motion threshold
+    /// [`Prepared::v_move`] after one that did not.
+    pub fn starts(&self) -> usize {
+        let moving = |v: &f64| v.abs() > self.v_move;
+        self.v
+            .windows(2)
+            .filter(|w| !moving(&w[0]) && moving(&w[1]))
+            .count()
+    }
 }
 
 /// Largest half window of the derivative estimate [samples].

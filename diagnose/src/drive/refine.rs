@@ -20,8 +20,8 @@
 //! fitting runs (140 for a direction-dependent model with friction both ways), and as many
 //! again per further sweep (at most [`MAX_WIDEN`]) while a parameter sits at the edge of its
 //! range. With a delay (6 parameters), up to 21 steps for it ([`delay_steps`]), then
-//! [`VALLEY_POINTS`] before and at most [`POLISH_RESTARTS`] x [`POLISH_ITERS`] Nelder-Mead
-//! iterations (1-2 simulations each) after: on the stranger plants' delayed logs 600-1,000
+//! [`VALLEY_POINTS`] + [`VALLEY_FRACTIONS`] before and at most [`POLISH_RESTARTS`] x
+//! [`POLISH_ITERS`] Nelder-Mead iterations (1-2 simulations each) after: on the stranger plants' delayed logs 600-1,000
 //! iterations in all, 4-8 s of a diagnosis.
 
 use super::estimate::Estimate;
@@ -221,10 +221,16 @@ pub fn refine(est: &Estimate, fit_error: &dyn Fn(&Estimate) -> f64) -> Option<(E
 /// `sqrt 10` to the power 1 to this (up to 10,000 times).
 pub const VALLEY_POINTS: i32 = 8;
 
+/// Fractions of the delay tried along its valley ([`refine_delayed`]): shortened by 1/8,
+/// 2/8, ... 7/8 of itself.
+pub const VALLEY_FRACTIONS: usize = 8;
+
 /// [`refine`] for a structure with an input delay, started from the best point of a scan
 /// along the valley where the delay and the inertia trade: the inertia raised by factors of
 /// `sqrt 10` ([`VALLEY_POINTS`]), the delay shortened by the lag that adds (`delta J / D`,
-/// `D` the mean viscous coefficient, `dt` the sample period [s]) while it stays positive.
+/// `D` the mean viscous coefficient, `dt` the sample period [s]) while it stays positive,
+/// and the delay shortened by eighths of itself ([`VALLEY_FRACTIONS`]) with the inertia
+/// raised by the lag it loses.
 /// Where the positions are held or jittered the least squares' acceleration is mostly noise
 /// and its inertia comes out orders of magnitude low (a stranger plant's 0.0006 against
 /// 0.92), with the delay long by the missing lag `J / D`: no local search from there reaches
@@ -241,13 +247,24 @@ pub fn refine_delayed(
     }
     let start = fit_error(est);
     let mut best: Option<(Estimate, f64)> = None;
-    for k in 1..=VALLEY_POINTS {
+    // the point of the valley with inertia `j`: the delay shortened by the lag that adds
+    let along = |j: f64| {
         let mut e = est.clone();
-        e.params.inertia = p.inertia * 10f64.powf(0.5 * k as f64);
-        e.structure.delay -= (e.params.inertia - p.inertia) / d / dt;
-        if e.structure.delay <= 0.0 {
-            break;
-        }
+        e.params.inertia = j;
+        e.structure.delay -= (j - p.inertia) / d / dt;
+        e
+    };
+    // the inertia by factors of sqrt 10 while the delay stays positive, then the delay
+    // shortened to fractions of itself: where the first factor already overshoots (an
+    // inertia 2.5 times low), those are the points between
+    let geometric = (1..=VALLEY_POINTS)
+        .map(|k| along(p.inertia * 10f64.powf(0.5 * k as f64)))
+        .take_while(|e| e.structure.delay > 0.0);
+    let linear = (1..VALLEY_FRACTIONS).map(|k| {
+        let shorter = est.structure.delay * k as f64 / VALLEY_FRACTIONS as f64;
+        along(p.inertia + shorter * d * dt)
+    });
+    for e in geometric.chain(linear) {
         let v = fit_error(&e);
         if v.is_finite() && v < best.as_ref().map_or(start, |b| b.1) {
             best = Some((e, v));

@@ -310,10 +310,10 @@ fn pick(
 ///
 /// `refined`: that refinement, where the output-error test of the selection already ran it.
 fn settle_delay(ctx: &Context<'_>, scored: Scored, refined: Option<Scored>) -> Scored {
-    let fit_error = |est: &Estimate| ctx.ex.fit_error(est);
     refined
         .or_else(|| {
-            super::refine::refine_delayed(&scored.est, &fit_error, ctx.dt)
+            ctx.ex
+                .refine_delayed(&scored.est, ctx.dt)
                 .and_then(|(est, _)| ctx.ex.score(est).ok())
         })
         .filter(|r| r.selection < scored.selection)
@@ -426,8 +426,9 @@ fn judge(
         .as_ref()
         .filter(|_| supported && sel.findings.is_empty())
     {
-        let fit_error = |est: &Estimate| ctx.ex.fit_error(est);
-        refined = super::refine::refine_delayed(&scored.est, &fit_error, ctx.dt)
+        refined = ctx
+            .ex
+            .refine_delayed(&scored.est, ctx.dt)
             .and_then(|(est, _)| ctx.ex.score(est).ok());
         let oe = refined
             .as_ref()
