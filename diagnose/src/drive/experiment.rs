@@ -27,9 +27,11 @@ pub const SLIDING_LEVEL_GAIN: f64 = 1.5;
 /// Fitting samples above which a delayed model is refined on the fitting runs' heads
 /// ([`Experiment::refine_delayed`]). The delay's refinement simulates the fitting runs
 /// 1,000-1,500 times (its Nelder-Mead polish along the delay's valley with the inertia,
-/// [`super::refine`]); on a 10 kHz log with a 60 s fitting run (600,000 samples, 0.08 s a
-/// simulation) that took 137 s of a 149 s diagnosis. The stranger plants' logs hold at most
-/// 180,000 rows in all, fitting and held-out: their refinement uses every fitting sample.
+/// [`super::refine`]); on a 10 kHz log with a 60 s fitting run (600,000 samples, about
+/// 0.08 s a simulation) the whole diagnosis took 98.4 s with it, against 14.5 s for the same
+/// log without a delay (`diagnose/benches/diagnose.rs`), and 57.9 s with these heads. The
+/// stranger plants' logs hold at most 180,000 rows in all, fitting and held-out: their
+/// refinement uses every fitting sample.
 pub const REFINE_SAMPLES: usize = 150_000;
 
 /// Starts from rest the heads of [`Experiment::refine_delayed`] hold at least (each one an

@@ -21,8 +21,9 @@
 //! again per further sweep (at most [`MAX_WIDEN`]) while a parameter sits at the edge of its
 //! range. With a delay (6 parameters), up to 21 steps for it ([`delay_steps`]), then
 //! [`VALLEY_POINTS`] + [`VALLEY_FRACTIONS`] before and at most [`POLISH_RESTARTS`] x
-//! [`POLISH_ITERS`] Nelder-Mead iterations (1-2 simulations each) after: on the stranger plants' delayed logs 600-1,000
-//! iterations in all, 4-8 s of a diagnosis.
+//! [`POLISH_ITERS`] Nelder-Mead iterations (1-2 simulations each) after: on the stranger
+//! plants' delayed logs 600-1,000 iterations in all, 4-8 s of a diagnosis. On a long log
+//! the caller runs it on the fitting runs' heads (`Experiment::refine_delayed`).
 
 use super::estimate::Estimate;
 use super::grid::GOLDEN;
