@@ -52,6 +52,12 @@
 //! `moments`, `gram`, `ls_pass`): every candidate's grid simulates the 600,000 fitting
 //! samples at each point, and once the delay is named every candidate is tried again on top
 //! of it. Choosing the grids' values on the heads too is the next step (not done).
+//! 2026-11-28 23:28-23:33 UTC, idle, one `crane diagnose DIR --json F` each, beside main
+//! `52c3a9a`: the candidates' grids (dead band, saturation, load share, Stribeck velocity,
+//! the delay's whole samples) are now chosen on the same heads and the chosen structure fitted
+//! on the whole runs (`drive/trial.rs`, `Search::heads`): this bench's delayed files
+//! **69.9 s** wall, 74.8 s user (80.3 s, 89.1 s before): **still over the 60 s goal**; the
+//! Python-written delayed log 36.7 s (62.8 s before). Reports byte-identical on both.
 
 use crane_diagnose::{diagnose, DiagnoseOptions};
 use crane_ident::rng::Rng;

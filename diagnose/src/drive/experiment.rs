@@ -214,11 +214,20 @@ impl<'a> Experiment<'a> {
         (v < start).then_some((e, v))
     }
 
+    /// The fitting runs' heads on a long log: [`REFINE_SAMPLES`] samples in all, the same
+    /// fraction of every run, holding at least [`REFINE_STARTS`] starts from rest; `None` when
+    /// the fitting runs hold no more than that (or the heads would be the whole runs). The
+    /// grid-searched values of [`super::trial`] are chosen on an experiment of these, as the
+    /// delayed model is refined on them ([`Experiment::refine_delayed`]).
+    pub fn long_heads(&self) -> Option<Vec<Prepared>> {
+        self.heads(REFINE_SAMPLES)
+    }
+
     /// The fitting runs' heads for [`Experiment::refine_delayed_within`]: the same fraction
     /// of every run, `budget` samples in all, doubled until they hold [`REFINE_STARTS`]
     /// starts from rest; `None` when the runs hold no more than `budget` samples, or the
     /// heads would be the whole runs.
-    fn heads(&self, budget: usize) -> Option<Vec<Prepared>> {
+    pub(super) fn heads(&self, budget: usize) -> Option<Vec<Prepared>> {
         let total: usize = self.fit.iter().map(|r| r.run.x.len()).sum();
         let mut fraction = budget as f64 / total as f64;
         while fraction < 1.0 {
@@ -282,13 +291,13 @@ impl<'a> Experiment<'a> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::drive::prep::DriveRun;
 
     /// A run of `n` samples at 1 kHz: pulses of 5 (0.3 s) of alternating sign, each followed
     /// by 0.7 s of rest, positions simulated by `truth`.
-    fn pulses(truth: &Estimate, n: usize) -> Prepared {
+    pub(crate) fn pulses(truth: &Estimate, n: usize) -> Prepared {
         let dt = 1e-3;
         let u: Vec<f64> = (0..n)
             .map(|k| match k % 2000 {

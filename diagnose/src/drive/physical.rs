@@ -5,6 +5,22 @@ use super::estimate::{Dir, Estimate};
 use crate::Cause;
 use crane_model::drive::PositionForce;
 
+/// How closely a delay is placed [samples]: to about one sample (whole samples on the grid
+/// at short delays; the fraction refined after them moves with the inertia's error, which it
+/// trades against). A delay within this of the log's own timing uncertainty is not told
+/// apart from it ([`delay_resolved`]).
+pub const DELAY_RESOLUTION: f64 = 1.0;
+
+/// Whether a delay of `delay` samples lies beyond the log's own timing uncertainty `timing`
+/// [samples] (see [`super::select::Context::timing`]) by more than [`DELAY_RESOLUTION`]. A
+/// delay at the uncertainty is what the log's timing alone produces: on the independent
+/// plant (`tools/strangers`, seed 11, case s069: a force offset, a log whose position and
+/// input are refreshed every 3 rows) a delay of 3.00001 samples was named, with the
+/// uncertainty 3.
+pub(super) fn delay_resolved(delay: f64, timing: usize) -> bool {
+    delay > timing as f64 + DELAY_RESOLUTION
+}
+
 /// Whether a cause's fitted parameters are physical; otherwise why not. `timing`: the log's
 /// own timing uncertainty [samples] (see [`super::select::Context::timing`]).
 pub(super) fn physical(
@@ -56,10 +72,10 @@ pub(super) fn physical(
         }
         Cause::ForceOffset => (p.offset.is_finite(), None),
         Cause::InputDeadzone => (est.structure.deadband > before.structure.deadband, None),
-        Cause::InputDelay if est.structure.delay <= timing as f64 => (
+        Cause::InputDelay if !delay_resolved(est.structure.delay, timing) => (
             false,
             Some(format!(
-                "input_delay: {:.2} sample(s) is within the log's own timing uncertainty ({timing}: the zero-order hold's sample, and the rows between fresh positions): the recorded input and position cannot place a delay that short",
+                "input_delay: {:.2} sample(s) is within a sample of the log's own timing uncertainty ({timing}: the zero-order hold's sample, and the rows between fresh positions): the recorded input and position cannot place a delay that short",
                 est.structure.delay
             )),
         ),

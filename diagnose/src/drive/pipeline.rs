@@ -65,8 +65,13 @@ pub fn diagnose_drive(
     let fit = &ex.fit;
     let sat_grid = super::trial::saturation_grid(fit, &th, ctx.umax);
     let shortest = fit.iter().map(|p| p.run.x.len()).min().unwrap_or(0);
+    let heads = ex.long_heads();
+    let short = heads
+        .as_ref()
+        .map(|h| Experiment::new(h, th, info.motion, center));
     let search = Search {
         ex: &ex,
+        heads: short.as_ref(),
         umax: ctx.umax,
         sat_grid: &sat_grid,
         stribeck_grid: &super::trial::stribeck_grid(fit, &th),

@@ -8,7 +8,7 @@ use super::estimate::{Dir, Estimate};
 use super::evidence::{cause_parameters, extra_parameters, force_rms};
 use super::experiment::{at_floor, Baseline, Experiment};
 use super::info::DriveInfo;
-use super::physical::{load_overlap, physical};
+use super::physical::{delay_resolved, load_overlap, physical};
 use super::score::{nmae_no_motion, Scored};
 use super::trial::{try_cause, Search};
 use crate::report::nmae_or_diverged::text as pct;
@@ -271,8 +271,8 @@ pub(super) fn forward(ctx: &Context<'_>, search: &Search<'_>) -> Selection {
 
 /// The cause this round names: the supported one with the lowest held-out error
 /// ([`prefer_stiction`]); a delay is settled first ([`settle_delay`]). A delay that settles
-/// within the log's timing uncertainty (which [`physical`] refuses) was the least squares'
-/// bias standing in for a cause: nothing is named (with a note, its candidate no longer
+/// within a sample of the log's timing uncertainty ([`delay_resolved`], which [`physical`]
+/// refuses too) was the least squares' bias standing in for a cause: nothing is named (with a note, its candidate no longer
 /// supported), since the next best stands in for the same bias (a 1 mm encoder count on a
 /// 1 kHz log: a 0.5-sample delay, then a saturation and a bump, with nothing hidden).
 fn pick(
@@ -288,12 +288,12 @@ fn pick(
     }
     let settled = settle_delay(ctx, scored, refined.remove(&cause));
     let (d, timing) = (settled.est.structure.delay, ctx.timing);
-    if d > timing as f64 {
+    if delay_resolved(d, timing) {
         return Some((cause, settled));
     }
     sel.notes.insert(
         cause,
-        format!("input_delay: refined with the inertia and friction by output error, the delay is {d:.2} sample(s), within the log's own timing uncertainty ({timing}): the least squares' longer delay stood in for their bias"),
+        format!("input_delay: refined with the inertia and friction by output error, the delay is {d:.2} sample(s), within a sample of the log's own timing uncertainty ({timing}): the least squares' longer delay stood in for their bias"),
     );
     if let Some(c) = sel.candidates.iter_mut().rev().find(|c| c.cause == cause) {
         c.supported = false;

@@ -53,6 +53,13 @@ pub const DELAY_REFINE: usize = 8;
 pub(super) struct Search<'a> {
     /// The runs, and how a structure is fitted and scored on them.
     pub ex: &'a Experiment<'a>,
+    /// On a long log, the fitting runs' heads ([`Experiment::long_heads`]): the dead band,
+    /// saturation, load share, Stribeck velocity and delay are chosen on their simulation,
+    /// and the chosen structure is then fitted on the whole fitting runs and scored. A grid
+    /// simulates the fitting runs once per point (40-60 points with the golden-section steps);
+    /// on a 10 kHz log with a 60 s fitting run that is 600,000 samples each. The bump's site
+    /// is chosen on the whole runs: a head need not reach every position the runs visit.
+    pub heads: Option<&'a Experiment<'a>>,
     /// Largest |input| of the fitting runs.
     pub umax: f64,
     /// Saturation levels tried ([`saturation_grid`]).
@@ -132,13 +139,9 @@ pub(super) fn try_cause(
     let (ex, umax) = (search.ex, search.umax);
     let s = current.est.structure;
     let one = |s: Structure| ex.fit_and_score(s).ok().map(|r| (r, None));
-    // a structure fitted on the fitting runs, with its simulated error there (the measure
-    // every grid-searched value is chosen by)
-    let fitted = |st: Structure| -> Option<(Estimate, f64)> {
-        let (est, e) = ex.fit_with_error(st).ok()?;
-        let e = e.unwrap_or_else(|| ex.fit_error(&est));
-        Some((est, e))
-    };
+    // on the fitting runs, or their heads on a long log (`Search::heads`)
+    let fitted = |st: Structure| fitted_on(search.heads.unwrap_or(ex), st);
+    let settle = |est: Estimate| settle(search, est);
     match cause {
         Cause::RestoringForce if !s.restoring => one(Structure {
             restoring: true,
@@ -167,7 +170,7 @@ pub(super) fn try_cause(
                     format!("Stribeck velocity at the highest value tried ({:.4}, the {} quantile of the moving |v|: the friction does not fall off within the motions; grid edge)", b.at, STRIBECK_TOP_QUANTILE)
                 }
             });
-            ex.score(b.value).ok().map(|r| (r, edge))
+            settle(b.value).map(|r| (r, edge))
         }
         Cause::DirectionAsymmetry if !s.asymmetric => one(Structure {
             asymmetric: true,
@@ -192,7 +195,7 @@ pub(super) fn try_cause(
                     if lowest { DEADBAND_RANGE.0 } else { DEADBAND_RANGE.1 }
                 )
                 });
-            ex.score(b.value).ok().map(|r| (r, edge))
+            settle(b.value).map(|r| (r, edge))
         }
         Cause::InputSaturation if s.saturation == 0.0 && !search.sat_grid.is_empty() => {
             // levels chosen on the fitting runs, like the dead band's: the grid over quantiles
@@ -213,7 +216,7 @@ pub(super) fn try_cause(
                     if b.at == grid[0] { SATURATION_QUANTILES[0] } else { SATURATION_QUANTILES[SATURATION_QUANTILES.len() - 1] }
                 )
             });
-            ex.score(b.value).ok().map(|r| (r, edge))
+            settle(b.value).map(|r| (r, edge))
         }
         Cause::LoadDependentFriction if s.load == 0.0 => {
             // chosen on the fitting runs' simulation, like the dead band: a least squares of
@@ -233,7 +236,7 @@ pub(super) fn try_cause(
                     b.at
                 )
             });
-            ex.score(b.value).ok().map(|r| (r, edge))
+            settle(b.value).map(|r| (r, edge))
         }
         Cause::LocalizedFriction if s.bump.is_none() => {
             // the sites around the peak of the binned sliding residual, each with its
@@ -242,38 +245,55 @@ pub(super) fn try_cause(
             let best = super::local::sites(g)
                 .into_iter()
                 .filter_map(|site| {
-                    fitted(Structure {
-                        bump: Some(site),
-                        ..s
-                    })
+                    fitted_on(
+                        ex,
+                        Structure {
+                            bump: Some(site),
+                            ..s
+                        },
+                    )
                     .filter(|(_, e)| e.is_finite())
                 })
                 .min_by(|a, b| a.1.total_cmp(&b.1))?;
             ex.score(best.0).ok().map(|r| (r, None))
         }
         Cause::InputDelay if s.delay == 0.0 && !search.delay_grid.is_empty() => {
-            try_delay(s, search, &fitted)
+            try_delay(s, search)
         }
         _ => None,
     }
 }
 
+/// A structure fitted on the runs of `on`, with its simulated error there (the measure every
+/// grid-searched value is chosen by).
+fn fitted_on(on: &Experiment<'_>, st: Structure) -> Option<(Estimate, f64)> {
+    let (est, e) = on.fit_with_error(st).ok()?;
+    let e = e.unwrap_or_else(|| on.fit_error(&est));
+    Some((est, e))
+}
+
+/// A model whose grid values were chosen on `search`'s runs (or their heads), fitted on the
+/// whole fitting runs (when it was chosen on the heads) and scored on the held-out runs.
+fn settle(search: &Search<'_>, est: Estimate) -> Option<Scored> {
+    let ex = search.ex;
+    let est = match search.heads {
+        Some(_) => ex.fit_only(est.structure).ok()?,
+        None => est,
+    };
+    ex.score(est).ok()
+}
+
 /// The delay added to structure `s`: the best whole delay of the grid, refined to a fraction
 /// of a sample between its neighbours ([`DELAY_REFINE`]); at the grid's edge, the whole value
-/// with a note (no finding, not refined). `fitted`: a structure fitted on the fitting runs
-/// with its simulated error there.
-fn try_delay(
-    s: Structure,
-    search: &Search<'_>,
-    fitted: &dyn Fn(Structure) -> Option<(Estimate, f64)>,
-) -> Option<(Scored, Option<String>)> {
-    let ex = search.ex;
-    let grid = search.delay_grid;
+/// with a note (no finding, not refined). On a long log the whole delay is chosen on the
+/// fitting runs' heads ([`Search::heads`]) and its fraction on the whole runs: the heads'
+/// least squares (a quarter of a 10 kHz log's samples, `diagnose/benches/diagnose.rs`) left
+/// the delay a sample short, the whole runs' within a third of one.
+fn try_delay(s: Structure, search: &Search<'_>) -> Option<(Scored, Option<String>)> {
+    let (ex, grid) = (search.ex, search.delay_grid);
+    let at = |d: f64| Structure { delay: d, ..s };
     let whole = super::grid::integer(grid, |d| {
-        fitted(Structure {
-            delay: d as f64,
-            ..s
-        })
+        fitted_on(search.heads.unwrap_or(ex), at(d as f64))
     })?;
     // an edge is no finding and is not refined; inside, the delay is refined to a
     // fraction of a sample between its whole neighbours
@@ -283,11 +303,82 @@ fn try_delay(
             whole.at,
             whole.at as f64 * search.dt
         );
-        return ex.score(whole.value).ok().map(|r| (r, Some(note)));
+        return settle(search, whole.value).map(|r| (r, Some(note)));
     }
+    // the whole runs' error at the heads' choice, where the fraction starts from
+    let whole = match search.heads {
+        Some(_) => {
+            let (value, err) = fitted_on(ex, at(whole.at as f64))?;
+            super::grid::Best {
+                value,
+                err,
+                ..whole
+            }
+        }
+        None => whole,
+    };
     let top = grid.last().map_or(0.0, |&g| g as f64);
-    let b = super::grid::fractional(whole, (0.0, top), DELAY_REFINE, |d| {
-        fitted(Structure { delay: d, ..s })
-    })?;
+    let b = super::grid::fractional(whole, (0.0, top), DELAY_REFINE, |d| fitted_on(ex, at(d)))?;
     ex.score(b.value).ok().map(|r| (r, None))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::drive::experiment::tests::pulses;
+    use crate::drive::prep::Thresholds;
+    use crane_model::drive::Motion;
+
+    #[test]
+    fn a_long_logs_delay_is_chosen_on_the_heads_and_fitted_on_the_whole_runs() {
+        let mut truth = crate::drive::refine::tests::estimate(0.5, [2.0, 2.0], [1.0, 1.0]);
+        truth.structure.delay = 20.0;
+        let mut held = pulses(&truth, 10_000);
+        held.run.held_out = true;
+        let runs = [pulses(&truth, 48_000), held];
+        let th = Thresholds {
+            v_peak: 2.0,
+            v_move: 1e-3,
+            v_slide: 0.2,
+            quantum: 1e-9,
+        };
+        let ex = Experiment::new(&runs, th, Motion::Linear, 0.0);
+        let heads = ex.heads(6_000).expect("heads of 24,000 samples");
+        let short = Experiment::new(&heads, th, Motion::Linear, 0.0);
+        let grid = crate::drive::grid::delay_grid(1e-3, 48_000);
+        let search = |heads| Search {
+            ex: &ex,
+            heads,
+            umax: 5.0,
+            sat_grid: &[],
+            stribeck_grid: &[],
+            delay_grid: &grid,
+            dt: 1e-3,
+            bump_guess: &|_| None,
+        };
+        let plain = Structure {
+            delay: 0.0,
+            ..truth.structure
+        };
+        let base = ex.fit_and_score(plain).expect("baseline");
+        let delay = |heads| {
+            let (r, note) = try_cause(Cause::InputDelay, &base, &search(heads)).expect("tried");
+            assert!(note.is_none(), "{note:?}");
+            r
+        };
+        let (on_heads, on_whole) = (delay(Some(&short)), delay(None));
+        for r in [&on_heads, &on_whole] {
+            let d = r.est.structure.delay;
+            assert!((d - 20.0).abs() < 1.0, "{d}");
+            assert!(r.selection < 0.5 * base.selection);
+        }
+        // the model named is the one the whole fitting runs give with that delay
+        let refit = ex.fit_only(on_heads.est.structure).expect("fits");
+        assert_eq!(refit.params, on_heads.est.params);
+        // the heads chose the same whole sample: the fractions agree
+        assert_eq!(
+            on_heads.est.structure.delay.to_bits(),
+            on_whole.est.structure.delay.to_bits()
+        );
+    }
 }
