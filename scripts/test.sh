@@ -44,20 +44,6 @@ timeout 300 qemu-system-arm -cpu cortex-m4 -machine mps2-an386 -nographic \
   > "$qemu_log" 2>&1 < /dev/null &
 qemu_pid=$!
 
-# The release `crane` (the strangers sweep, the FMU's and the python tests' reference) builds
-# in the background from here, in a target directory of its own: cargo locks the directory a
-# build writes (and the host one a cross build's build scripts go to), so in `target` it would
-# wait for the firmware and board builds below. Those compile one crate at a time for most of
-# their ~200 s and leave a core idle, which this build uses. The FMU builds into the same
-# directory (its dependencies are the same release builds). Measured 2026-11-28 on the 2-core
-# machine: that release build 292 s cold when alone.
-abs_target="${CARGO_TARGET_DIR:-target}"
-case "$abs_target" in /*) ;; *) abs_target="$PWD/$abs_target" ;; esac
-rel_target="$abs_target/host-release"
-crane_log="$abs_target/crane-release.log"
-CARGO_TARGET_DIR="$rel_target" cargo build --release --bin crane > "$crane_log" 2>&1 < /dev/null &
-crane_pid=$!
-
 step "clippy (firmware, thumbv7em-none-eabihf)"
 cargo clippy -p firmware --target thumbv7em-none-eabihf -- -D warnings
 cargo clippy -p firmware --target thumbv7em-none-eabihf --features probe -- -D warnings && cargo build -p firmware --target thumbv7em-none-eabihf --release --features probe
@@ -107,9 +93,8 @@ cargo test --workspace --exclude firmware --exclude board-stm32 --doc
 # FMU through FMPy (validation, bit-exact trajectory against `crane simulate`, wrong
 # parameter, step not a multiple of h, 1,000 instantiate/reset/free cycles without RSS
 # growth). Measured on the 2-core dev machine: 6.5 s warm (builds up to date, venv present;
-# pytest itself 3 s); cold, add the venv with fmpy + pytest (36 s) and the release build of
-# the FMU (1.4 min; 28 s on the release dependencies `crane` built). The release `crane` was
-# started in the background after the firmware's cross build and is waited for here.
+# pytest itself 3 s); cold, add the venv with fmpy + pytest (36 s) and the release builds of
+# the FMU (1.4 min) and of `crane` (user time 1.5 min; 6 min wall at load average 10).
 step "FMU: build crane.fmu, FMPy + pytest"
 ensure_venv() {
   local venv="${CARGO_TARGET_DIR:-target}/venv"
@@ -126,10 +111,7 @@ ensure_venv() {
 }
 fmu_target="${CARGO_TARGET_DIR:-target}"
 case "$fmu_target" in /*) ;; *) fmu_target="$PWD/$fmu_target" ;; esac
-crane_rc=0; wait "$crane_pid" || crane_rc=$?
-tail -n 2 "$crane_log"
-[ "$crane_rc" -eq 0 ] || { cat "$crane_log" >&2; echo "release build of crane failed (exit $crane_rc)" >&2; exit 1; }
-crane_bin="$rel_target/release/crane"
+cargo build --release --bin crane
 ensure_venv "fmpy>=0.3.32,<0.4" pytest==9.2.0 numpy==2.4.6
 # ---- strangers (issue 20), started as soon as `crane` and numpy are there, waited for at the
 # end: an independent single-axis plant (tools/strangers: numpy only, written from a physics
@@ -143,11 +125,11 @@ ensure_venv "fmpy>=0.3.32,<0.4" pytest==9.2.0 numpy==2.4.6
 # guard, not a speed figure: 300 s, where the slowest case took 101 s alone on 2 idle cores
 # (the published set, 2026-11-27) and may share them with the FMU's and the wheel's builds.
 strangers_log="$fmu_target/strangers.log"
-CRANE_BIN="$crane_bin" STRANGERS_TIMEOUT=300 \
+CRANE_BIN="$fmu_target/release/crane" STRANGERS_TIMEOUT=300 \
   "$VENV_PY" -m pytest -q -p no:cacheprovider tools/strangers/test_strangers.py \
   > "$strangers_log" 2>&1 < /dev/null &
 strangers_pid=$!
-CARGO_TARGET_DIR="$rel_target" bash scripts/build-fmu.sh "$fmu_target/crane.fmu"
+bash scripts/build-fmu.sh "$fmu_target/crane.fmu"
 # (its pytest runs after the python block: the FMU with stiction and the tanh law is compared
 # bit for bit with `crane_twin`, which is installed there)
 # ---- end FMU ------------------------------------------------------------------------------
@@ -197,6 +179,7 @@ step "python: the wheel in a clean venv without cargo on the PATH, pytest python
 no_rust_path="$wheel_venv/bin:/usr/bin:/bin"
 rust_found="$(env PATH="$no_rust_path" bash -c 'command -v cargo rustc rustup' || true)"
 [ -z "$rust_found" ] || { echo "Rust is reachable on $no_rust_path: $rust_found" >&2; exit 1; }
+crane_bin="$fmu_target/release/crane"
 [ -x "$crane_bin" ] || { echo "CRANE_BIN $crane_bin missing: the bit-exactness test needs it" >&2; exit 1; }
 PATH="$no_rust_path" CRANE_TWIN_WHEEL_TEST=1 CRANE_BIN="$crane_bin" RAY_USAGE_STATS_ENABLED=0 \
   "$wheel_venv/bin/python" -m pytest -q -p no:cacheprovider python/tests
@@ -205,7 +188,7 @@ step "python: API reference (pdoc) into ${CARGO_TARGET_DIR:-target}/api"
 rm -rf "$fmu_target/api"
 "$venv/bin/python" scripts/build-api-docs.py "$fmu_target/api"
 step "FMU: FMPy + pytest (against crane simulate and crane_twin)"
-CRANE_FMU="$fmu_target/crane.fmu" CRANE_BIN="$crane_bin" \
+CRANE_FMU="$fmu_target/crane.fmu" CRANE_BIN="$fmu_target/release/crane" \
   "$VENV_PY" -m pytest -q -p no:cacheprovider fmu/tests/test_fmu.py
 # ---- end python ----------------------------------------------------------------------------
 
