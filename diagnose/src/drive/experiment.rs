@@ -324,17 +324,24 @@ pub(crate) mod tests {
         p
     }
 
-    #[test]
-    fn a_long_delayed_log_is_refined_on_its_heads_and_judged_on_the_whole() {
+    /// The carriage [`pulses`] are simulated with in the delay tests: J 0.5, viscous 2, dry 1,
+    /// the input 20 samples late; and the thresholds of its runs.
+    pub(crate) fn delayed_carriage() -> (Estimate, Thresholds) {
         let mut truth = crate::drive::refine::tests::estimate(0.5, [2.0, 2.0], [1.0, 1.0]);
         truth.structure.delay = 20.0;
-        let runs = [pulses(&truth, 48_000)];
         let th = Thresholds {
             v_peak: 2.0,
             v_move: 1e-3,
             v_slide: 0.2,
             quantum: 1e-9,
         };
+        (truth, th)
+    }
+
+    #[test]
+    fn a_long_delayed_log_is_refined_on_its_heads_and_judged_on_the_whole() {
+        let (truth, th) = delayed_carriage();
+        let runs = [pulses(&truth, 48_000)];
         let ex = Experiment::new(&runs, th, Motion::Linear, 0.0);
         // 48 s of pulses: 48 starts; heads of 6,000 samples hold 6, doubled to 24,000 (24)
         assert_eq!(runs[0].starts(), 48);

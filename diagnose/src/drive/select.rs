@@ -272,9 +272,10 @@ pub(super) fn forward(ctx: &Context<'_>, search: &Search<'_>) -> Selection {
 /// The cause this round names: the supported one with the lowest held-out error
 /// ([`prefer_stiction`]); a delay is settled first ([`settle_delay`]). A delay that settles
 /// within a sample of the log's timing uncertainty ([`delay_resolved`], which [`physical`]
-/// refuses too) was the least squares' bias standing in for a cause: nothing is named (with a note, its candidate no longer
-/// supported), since the next best stands in for the same bias (a 1 mm encoder count on a
-/// 1 kHz log: a 0.5-sample delay, then a saturation and a bump, with nothing hidden).
+/// refuses too) was the least squares' bias standing in for a cause: nothing is named (with
+/// a note, its candidate no longer supported), since the next best stands in for the same
+/// bias (a 1 mm encoder count on a 1 kHz log: a 0.5-sample delay, then a saturation and a
+/// bump, with nothing hidden).
 fn pick(
     ctx: &Context<'_>,
     sel: &mut Selection,

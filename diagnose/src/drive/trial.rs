@@ -325,23 +325,15 @@ fn try_delay(s: Structure, search: &Search<'_>) -> Option<(Scored, Option<String
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::drive::experiment::tests::pulses;
-    use crate::drive::prep::Thresholds;
+    use crate::drive::experiment::tests::{delayed_carriage, pulses};
     use crane_model::drive::Motion;
 
     #[test]
     fn a_long_logs_delay_is_chosen_on_the_heads_and_fitted_on_the_whole_runs() {
-        let mut truth = crate::drive::refine::tests::estimate(0.5, [2.0, 2.0], [1.0, 1.0]);
-        truth.structure.delay = 20.0;
+        let (truth, th) = delayed_carriage();
         let mut held = pulses(&truth, 10_000);
         held.run.held_out = true;
         let runs = [pulses(&truth, 48_000), held];
-        let th = Thresholds {
-            v_peak: 2.0,
-            v_move: 1e-3,
-            v_slide: 0.2,
-            quantum: 1e-9,
-        };
         let ex = Experiment::new(&runs, th, Motion::Linear, 0.0);
         let heads = ex.heads(6_000).expect("heads of 24,000 samples");
         let short = Experiment::new(&heads, th, Motion::Linear, 0.0);
