@@ -87,14 +87,30 @@ host_tests_json="${CARGO_TARGET_DIR:-target}/host-tests.json"
 cargo test --workspace --exclude firmware --exclude board-stm32 --no-run --message-format=json-render-diagnostics > "$host_tests_json"
 python3 scripts/run-test-binaries.py --jobs 2 -- --include-ignored < "$host_tests_json"
 cargo test --workspace --exclude firmware --exclude board-stm32 --doc
+# The `crane` binary the test build made (test profile: opt-level 2, no LTO, debug assertions
+# and overflow checks on), for the strangers sweep, the FMU's and the wheel's comparisons
+# below. A release build of it took 288 s of the CI (4m48s, 2026-11-28) and runs no faster:
+# `crane diagnose` on six stranger cases took 0.92-1.01 times the release binary's wall time,
+# with byte-identical reports, and the FMU's and the wheel's bit-for-bit tests pass with it
+# (2026-11-29, idle). The path is read from the build's own messages, not guessed.
+crane_bin="$(python3 -c '
+import json, sys
+for line in sys.stdin:
+    m = json.loads(line) if line.startswith("{") else {}
+    t = m.get("target", {})
+    if m.get("reason") == "compiler-artifact" and t.get("name") == "crane" and "bin" in t.get("kind", []) and not m["profile"]["test"]:
+        print(m["executable"])
+' < "$host_tests_json")"
+[ -x "$crane_bin" ] || { echo "the test build made no crane binary (read from $host_tests_json)" >&2; exit 1; }
+echo "crane: $crane_bin"
 
 # ---- FMU (issue 13): build crane.fmu, FMPy validates and simulates it ------------------
 # The C-ABI tests (`cargo test -p crane-fmu`) ran with the host tests above. Here: the packed
 # FMU through FMPy (validation, bit-exact trajectory against `crane simulate`, wrong
 # parameter, step not a multiple of h, 1,000 instantiate/reset/free cycles without RSS
 # growth). Measured on the 2-core dev machine: 6.5 s warm (builds up to date, venv present;
-# pytest itself 3 s); cold, add the venv with fmpy + pytest (36 s) and the release builds of
-# the FMU (1.4 min) and of `crane` (user time 1.5 min; 6 min wall at load average 10).
+# pytest itself 3 s); cold, add the venv with fmpy + pytest (36 s) and the release build of
+# the FMU (1.4 min). `crane` is the test build's ($crane_bin, above).
 step "FMU: build crane.fmu, FMPy + pytest"
 ensure_venv() {
   local venv="${CARGO_TARGET_DIR:-target}/venv"
@@ -111,9 +127,8 @@ ensure_venv() {
 }
 fmu_target="${CARGO_TARGET_DIR:-target}"
 case "$fmu_target" in /*) ;; *) fmu_target="$PWD/$fmu_target" ;; esac
-cargo build --release --bin crane
 ensure_venv "fmpy>=0.3.32,<0.4" pytest==9.2.0 numpy==2.4.6
-# ---- strangers (issue 20), started as soon as `crane` and numpy are there, waited for at the
+# ---- strangers (issue 20), started as soon as numpy is there (`crane` is), waited for at the
 # end: an independent single-axis plant (tools/strangers: numpy only, written from a physics
 # spec without reading diagnose/): its physics tests, and the sweep of the release `crane
 # diagnose` over its 70 seeded cases (about 5 min on 2 idle cores): no crash or timeout, no
@@ -124,8 +139,9 @@ ensure_venv "fmpy>=0.3.32,<0.4" pytest==9.2.0 numpy==2.4.6
 # that block installs nothing over them while the sweep runs. The per-case timeout is a hang
 # guard, not a speed figure: 300 s, where the slowest case took 101 s alone on 2 idle cores
 # (the published set, 2026-11-27) and may share them with the FMU's and the wheel's builds.
+# The binary is the test build's `crane` (debug assertions on: one failing is a crash here).
 strangers_log="$fmu_target/strangers.log"
-CRANE_BIN="$fmu_target/release/crane" STRANGERS_TIMEOUT=300 \
+CRANE_BIN="$crane_bin" STRANGERS_TIMEOUT=300 \
   "$VENV_PY" -m pytest -q -p no:cacheprovider tools/strangers/test_strangers.py \
   > "$strangers_log" 2>&1 < /dev/null &
 strangers_pid=$!
@@ -141,7 +157,7 @@ bash scripts/build-fmu.sh "$fmu_target/crane.fmu"
 # its dependencies and the test tools, and python/tests run against it with a PATH of that
 # venv's bin, /usr/bin and /bin: no cargo, no rustc (test_wheel.py checks that, and that
 # crane_twin comes from that venv's site-packages, installed from the .whl). CRANE_BIN is the
-# release `crane` built above (test_bits.py compares with it; without it the tests would
+# test build's `crane` (above; test_bits.py compares with it; without it the tests would
 # fail here, not build). The shared venv gets the same wheel (the FMU comparison below, the
 # API reference, the blocks after). Measured 2026-11-27 (2 shared cores, load average 3; fresh
 # venv, `crane` built, the extension not): 107 s, of which the wheel build 78 s and pytest 10 s;
@@ -179,8 +195,6 @@ step "python: the wheel in a clean venv without cargo on the PATH, pytest python
 no_rust_path="$wheel_venv/bin:/usr/bin:/bin"
 rust_found="$(env PATH="$no_rust_path" bash -c 'command -v cargo rustc rustup' || true)"
 [ -z "$rust_found" ] || { echo "Rust is reachable on $no_rust_path: $rust_found" >&2; exit 1; }
-crane_bin="$fmu_target/release/crane"
-[ -x "$crane_bin" ] || { echo "CRANE_BIN $crane_bin missing: the bit-exactness test needs it" >&2; exit 1; }
 PATH="$no_rust_path" CRANE_TWIN_WHEEL_TEST=1 CRANE_BIN="$crane_bin" RAY_USAGE_STATS_ENABLED=0 \
   "$wheel_venv/bin/python" -m pytest -q -p no:cacheprovider python/tests
 
@@ -188,7 +202,7 @@ step "python: API reference (pdoc) into ${CARGO_TARGET_DIR:-target}/api"
 rm -rf "$fmu_target/api"
 "$venv/bin/python" scripts/build-api-docs.py "$fmu_target/api"
 step "FMU: FMPy + pytest (against crane simulate and crane_twin)"
-CRANE_FMU="$fmu_target/crane.fmu" CRANE_BIN="$fmu_target/release/crane" \
+CRANE_FMU="$fmu_target/crane.fmu" CRANE_BIN="$crane_bin" \
   "$VENV_PY" -m pytest -q -p no:cacheprovider fmu/tests/test_fmu.py
 # ---- end python ----------------------------------------------------------------------------
 
@@ -199,7 +213,7 @@ step "scipy peer: pytest tools/scripts/test_scipy_peer.py"
 "$venv/bin/python" -m pytest -q -p no:cacheprovider tools/scripts/test_scipy_peer.py
 # ---- end scipy peer ------------------------------------------------------------------------
 
-step "strangers: the independent plant's tests and the diagnose sweep (started after the release build of crane)"
+step "strangers: the independent plant's tests and the diagnose sweep (started after the FMU block's venv)"
 strangers_rc=0; wait "$strangers_pid" || strangers_rc=$?
 cat "$strangers_log"
 [ "$strangers_rc" -eq 0 ] || { echo "strangers: pytest failed (exit $strangers_rc)" >&2; exit 1; }
