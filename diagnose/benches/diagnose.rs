@@ -58,6 +58,12 @@
 //! on the whole runs (`drive/trial.rs`, `Search::heads`): this bench's delayed files
 //! **69.9 s** wall, 74.8 s user (80.3 s, 89.1 s before): **still over the 60 s goal**; the
 //! Python-written delayed log 36.7 s (62.8 s before). Reports byte-identical on both.
+//! 2026-11-29 02:05-02:12 UTC, idle, release, one `crane diagnose` each: with a round's
+//! candidates judged side by side (`drive/select.rs`; a log with one fitting run simulates on
+//! one core) this bench's delayed files **53.8 s and 54.6 s** wall, against 62.3 s for
+//! `aca9d0f` beside them; the same report. About 33 s of that is the named delay's
+//! output-error refinement on the heads (1,686 simulations of 150,000 samples, one after
+//! another; its Nelder-Mead polish about 870 iterations).
 
 use crane_diagnose::{diagnose, DiagnoseOptions};
 use crane_ident::rng::Rng;

@@ -71,7 +71,7 @@ pub(super) struct Search<'a> {
     /// The fitting runs' sample period [s] (the shortest, if they differ).
     pub dt: f64,
     /// The peak of a model's binned sliding residual ([`super::local::guess`]).
-    pub bump_guess: &'a dyn Fn(&Estimate) -> Option<BumpSite>,
+    pub bump_guess: &'a (dyn Fn(&Estimate) -> Option<BumpSite> + Sync),
 }
 
 /// The saturation levels tried: [`SATURATION_QUANTILES`] of |input| over the fitting runs'
@@ -141,7 +141,7 @@ pub(super) fn try_cause(
     let one = |s: Structure| ex.fit_and_score(s).ok().map(|r| (r, None));
     // on the fitting runs, or their heads on a long log (`Search::heads`)
     let fitted = |st: Structure| fitted_on(search.heads.unwrap_or(ex), st);
-    let settle = |est: Estimate| settle(search, est);
+    let settled = |est: Estimate| settle(search, est);
     match cause {
         Cause::RestoringForce if !s.restoring => one(Structure {
             restoring: true,
@@ -170,7 +170,7 @@ pub(super) fn try_cause(
                     format!("Stribeck velocity at the highest value tried ({:.4}, the {} quantile of the moving |v|: the friction does not fall off within the motions; grid edge)", b.at, STRIBECK_TOP_QUANTILE)
                 }
             });
-            settle(b.value).map(|r| (r, edge))
+            settled(b.value).map(|r| (r, edge))
         }
         Cause::DirectionAsymmetry if !s.asymmetric => one(Structure {
             asymmetric: true,
@@ -195,7 +195,7 @@ pub(super) fn try_cause(
                     if lowest { DEADBAND_RANGE.0 } else { DEADBAND_RANGE.1 }
                 )
                 });
-            settle(b.value).map(|r| (r, edge))
+            settled(b.value).map(|r| (r, edge))
         }
         Cause::InputSaturation if s.saturation == 0.0 && !search.sat_grid.is_empty() => {
             // levels chosen on the fitting runs, like the dead band's: the grid over quantiles
@@ -216,7 +216,7 @@ pub(super) fn try_cause(
                     if b.at == grid[0] { SATURATION_QUANTILES[0] } else { SATURATION_QUANTILES[SATURATION_QUANTILES.len() - 1] }
                 )
             });
-            settle(b.value).map(|r| (r, edge))
+            settled(b.value).map(|r| (r, edge))
         }
         Cause::LoadDependentFriction if s.load == 0.0 => {
             // chosen on the fitting runs' simulation, like the dead band: a least squares of
@@ -236,7 +236,7 @@ pub(super) fn try_cause(
                     b.at
                 )
             });
-            settle(b.value).map(|r| (r, edge))
+            settled(b.value).map(|r| (r, edge))
         }
         Cause::LocalizedFriction if s.bump.is_none() => {
             // the sites around the peak of the binned sliding residual, each with its
