@@ -799,6 +799,12 @@ pub const UNRESOLVED_TAU: f64 = 0.1;
 /// that stiff model took thousands of steps per sample: 156 s for a 45,000-row log).
 fn unresolved(fit: &[&Prepared], inertia: f64, visc: [f64; 2]) -> Option<Flag> {
     let dt = fit.iter().map(|p| p.run.dt).fold(f64::INFINITY, f64::min);
+    unresolved_at(dt, inertia, visc)
+}
+
+/// [`unresolved`] for the shortest sample period `dt` [s]: also what
+/// `Experiment::fit_error` asks of a model a refinement has scaled.
+pub(super) fn unresolved_at(dt: f64, inertia: f64, visc: [f64; 2]) -> Option<Flag> {
     let tau = inertia / visc[0].max(visc[1]);
     (dt.is_finite() && tau.is_finite() && tau < UNRESOLVED_TAU * dt).then_some(
         Flag::InertiaUnresolved {
