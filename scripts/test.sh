@@ -130,8 +130,8 @@ case "$fmu_target" in /*) ;; *) fmu_target="$PWD/$fmu_target" ;; esac
 ensure_venv "fmpy>=0.3.32,<0.4" pytest==9.2.0 numpy==2.4.6
 # ---- strangers (issue 20), started as soon as numpy is there (`crane` is), waited for at the
 # end: an independent single-axis plant (tools/strangers: numpy only, written from a physics
-# spec without reading diagnose/): its physics tests, and the sweep of the release `crane
-# diagnose` over its 70 seeded cases (about 5 min on 2 idle cores): no crash or timeout, no
+# spec without reading diagnose/): its physics tests, and the sweep of `crane diagnose` (the
+# test build's) over its 70 seeded cases (about 5 min on 2 idle cores): no crash or timeout, no
 # honesty failure (a diverged figure, a delay in samples only, a finding at a grid edge), and
 # the per-cause floors of test_strangers.py. It runs beside the FMU and python blocks below,
 # which wait on downloads, single-threaded pytest runs and link-time optimisation much of

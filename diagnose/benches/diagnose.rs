@@ -63,7 +63,8 @@
 //! one core) this bench's delayed files **53.8 s and 54.6 s** wall, against 62.3 s for
 //! `aca9d0f` beside them; the same report. About 33 s of that is the named delay's
 //! output-error refinement on the heads (1,686 simulations of 150,000 samples, one after
-//! another; its Nelder-Mead polish about 870 iterations).
+//! another; its Nelder-Mead polish about 870 iterations). Criterion, 2026-11-29 03:48-04:00
+//! UTC, idle, `2a93aec`: `long_10khz_120s_delayed` **50.8 s** (49.6-52.0 s): under the goal.
 
 use crane_diagnose::{diagnose, DiagnoseOptions};
 use crane_ident::rng::Rng;
